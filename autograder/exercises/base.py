@@ -1,0 +1,183 @@
+"""The building blocks of the exercise registry: cases, exercises and comparison rules.
+
+A graded function is described once, by an :class:`Exercise`: its reference implementation in
+``course_lib``, a generator of :class:`Case` objects (the visible cases that carry the exam's own
+numbers first, then hidden random and edge cases drawn from a seeded generator) and a comparison
+rule. The in-notebook hidden tests (:mod:`autograder.incell`) and the out-of-kernel grader both
+read the same objects, so a grading rule lives in one place.
+
+Everything that crosses from student code to the grader is *plain data*: ``None``, ``bool``,
+``int``, ``float``, ``str``, numeric NumPy arrays, and tuples/lists of those. :func:`to_plain`
+enforces that; anything else is rejected.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+#: Why a received value did not match: ``None`` means it matched.
+Verdict = "str | None"
+
+
+@dataclass(frozen=True)
+class Case:
+    """One call of a graded function.
+
+    Parameters
+    ----------
+    args, kwargs
+        Plain-data arguments (arrays, floats, strings, tuples).
+    label
+        A short description a student understands ("exam Q5(b) numbers", "batch of 7 vectors").
+    visible
+        True for the cases whose inputs and expected values the student may always see.
+    raises
+        The exception type the call must raise (``ValueError`` for bad input), or ``None``.
+    """
+
+    args: tuple = ()
+    kwargs: dict = field(default_factory=dict)
+    label: str = ""
+    visible: bool = False
+    raises: type[BaseException] | None = None
+
+
+@dataclass(frozen=True)
+class Exercise:
+    """A graded function (``kind="function"``) or a multiple-choice answer (``kind="choice"``).
+
+    ``name`` is the grade_id of the solution cell and the name the student defines; its test cell
+    is ``test_<name>``. For a choice, ``answer`` is the correct option (a string such as ``"b"``,
+    or a frozenset of options for "select all that apply") and ``options`` the allowed ones.
+    """
+
+    name: str
+    notebook: str
+    kind: str = "function"
+    reference: Callable | None = None
+    cases: Callable[[np.random.Generator], list[Case]] | None = None
+    compare: Callable[[Any, Any], str | None] | None = None
+    answer: Any = None
+    options: tuple = ()
+    description: str = ""
+
+    def expected(self, case: Case):
+        """The reference's plain-data answer for ``case`` (only for ``raises is None``)."""
+        return to_plain(self.reference(*case.args, **case.kwargs))
+
+
+# --------------------------------------------------------------------------------------------
+# plain data
+
+
+class NotPlainData(TypeError):
+    """Raised by :func:`to_plain` for an object that is not plain data."""
+
+
+def to_plain(value, _depth: int = 0):
+    """Convert ``value`` to plain data or raise :class:`NotPlainData`.
+
+    NumPy scalars become Python numbers; numeric arrays are copied as ``np.ndarray`` (never a
+    subclass); lists and tuples become tuples. Object arrays, custom classes (including ones that
+    subclass ``float`` or ``ndarray``) and dicts are rejected: a student's object could otherwise
+    decide its own comparison.
+    """
+    if _depth > 4:
+        raise NotPlainData("nested too deeply")
+    if value is None or type(value) in (bool, int, float, str):
+        return value
+    if type(value) in (np.bool_,):
+        return bool(value)
+    if type(value) in (np.float16, np.float32, np.float64, np.longdouble):
+        return float(value)
+    if isinstance(value, np.integer) and type(value).__module__ == "numpy":
+        return int(value)
+    if type(value) is np.ndarray:
+        if value.dtype.kind not in "biuf":
+            raise NotPlainData(f"an array of dtype {value.dtype} (expected numbers)")
+        return np.array(value, copy=True)
+    if type(value) in (tuple, list):
+        return tuple(to_plain(v, _depth + 1) for v in value)
+    raise NotPlainData(f"an object of type {type(value).__name__}")
+
+
+def describe(value) -> str:
+    """A short human description of a plain value: its type and shape."""
+    if isinstance(value, np.ndarray):
+        return f"array of shape {value.shape}"
+    if isinstance(value, tuple):
+        return f"tuple of {len(value)}"
+    return type(value).__name__
+
+
+# --------------------------------------------------------------------------------------------
+# comparison rules: each returns None when `received` matches `expected`, else a reason
+
+
+def close(rtol: float = 1e-6, atol: float = 1e-9) -> Callable[[Any, Any], str | None]:
+    """Element-wise ``np.allclose`` on arrays/floats, recursively through tuples.
+
+    Shapes must match exactly (a ``(1, 3)`` answer for a ``(3,)`` question is a wrong shape), a
+    Python float and a 0-d array are interchangeable, and bools must match exactly.
+    """
+
+    def rule(expected, received):
+        return _close(expected, received, rtol, atol)
+
+    rule.__doc__ = f"all values within rtol={rtol}, atol={atol}"
+    return rule
+
+
+def _close(expected, received, rtol, atol):
+    if expected is None or isinstance(expected, (bool, str)):
+        if type(received) is not type(expected) or received != expected:
+            return f"wrong value (expected {expected!r}, got {_short(received)})"
+        return None
+    if isinstance(expected, tuple):
+        if not isinstance(received, tuple) or len(received) != len(expected):
+            return f"wrong type (expected a tuple of {len(expected)}, got {describe(received)})"
+        for i, (e, r) in enumerate(zip(expected, received)):
+            why = _close(e, r, rtol, atol)
+            if why:
+                return f"item {i}: {why}"
+        return None
+    if isinstance(received, (bool, str, tuple)) or received is None:
+        return f"wrong type (expected numbers, got {describe(received)})"
+    e = np.asarray(expected, dtype=float)
+    r = np.asarray(received, dtype=float)
+    if e.shape != r.shape:
+        return f"wrong shape (expected {e.shape}, got {r.shape})"
+    if not np.all(np.isfinite(r) | ~np.isfinite(e)):
+        return "wrong value (NaN or inf in the answer)"
+    if not np.allclose(r, e, rtol=rtol, atol=atol, equal_nan=True):
+        err = np.max(np.abs(r - e)) if e.size else 0.0
+        return f"wrong value (largest error {err:.3g})"
+    return None
+
+
+def _short(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else describe(value)
+
+
+def same_choice(expected, received) -> str | None:
+    """Multiple choice: case- and space-insensitive option letters (a set for 'all that apply')."""
+    def norm(v):
+        if isinstance(v, str):
+            return frozenset(c for c in v.lower() if c.isalnum())
+        if isinstance(v, (tuple, frozenset, set)):
+            return frozenset(str(x).strip().lower() for x in v)
+        return None
+    got = norm(received)
+    if got is None:
+        return f"wrong type (expected option letters, got {describe(received)})"
+    return None if got == norm(expected) else "wrong answer"
+
+
+def isclose_scalar(a: float, b: float, rtol=1e-6, atol=1e-9) -> bool:
+    """Scalar tolerance test used by custom rules."""
+    return math.isclose(a, b, rel_tol=rtol, abs_tol=atol)

@@ -1,0 +1,1 @@
+"""4F9 reference library."""
