@@ -1,0 +1,44 @@
+"""``python -m autograder <command>``: the instructors' command line.
+
+Each command lives in its own module with a ``add_arguments(parser)`` and a ``main(args)``:
+
+- ``release``  student versions through ``nbgrader generate_assignment`` (autograder/release.py)
+- ``grade``    sandboxed batch grading, CSV, feedback, report, gradebook (autograder/grading.py)
+- ``lab``      JupyterLab on the student or the instructor view (autograder/lab.py)
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+COMMANDS = {
+    "release": ("autograder.release", "write the student versions of the assignment"),
+    "grade": ("autograder.grading", "grade a folder of submissions outside the students' kernels"),
+    "lab": ("autograder.lab", "open JupyterLab on the course (student or instructor view)"),
+}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m autograder", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    for name, (module_name, help_text) in COMMANDS.items():
+        p = sub.add_parser(name, help=help_text)
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            if exc.name != module_name:
+                raise
+            p.set_defaults(_missing=module_name)
+            continue
+        module.add_arguments(p)
+        p.set_defaults(_main=module.main)
+    args = parser.parse_args(argv)
+    if getattr(args, "_missing", None):
+        parser.error(f"command {args.command!r} is not available ({args._missing} is missing)")
+    return int(args._main(args) or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Topic figures: one module per exam question."""
