@@ -1,0 +1,76 @@
+"""``python -m benchmarks [--smoke] [--only NAME ...] [--out FILE]``: run every section, print
+the table of ratios and write it (with the machine it came from) to ``benchmarks/results.md``."""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import importlib
+import pkgutil
+import sys
+import traceback
+from pathlib import Path
+
+from .harness import Row, machine_summary
+
+HERE = Path(__file__).resolve().parent
+
+
+def sections() -> list[str]:
+    return sorted(m.name for m in pkgutil.iter_modules([str(HERE)]) if m.name.startswith("bench_"))
+
+
+def fmt(x: float | None, unit: str = "") -> str:
+    if x is None:
+        return "—"
+    if abs(x) >= 100:
+        return f"{x:,.0f}{unit}"
+    return f"{x:.3g}{unit}"
+
+
+def table(rows: list[Row]) -> str:
+    head = "| section | case | metric | ours | peer | ours / peer | notes |\n|---|---|---|---|---|---|---|"
+    lines = [head]
+    for r in rows:
+        peer = f"{fmt(r.peer)} {r.unit} ({r.peer_name})" if r.peer is not None else "—"
+        lines.append(f"| {r.section} | {r.case} | {r.metric} | {fmt(r.ours)} {r.unit} | {peer} | "
+                     f"{fmt(r.ratio)} | {r.notes} |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m benchmarks", description=__doc__)
+    p.add_argument("--smoke", action="store_true", help="tiny sizes: checks the benchmarks run")
+    p.add_argument("--only", nargs="*", default=None, help="section module names (bench_*)")
+    p.add_argument("--out", type=Path, default=None, help="results file (default benchmarks/results.md; "
+                   "with --smoke nothing is written unless given)")
+    args = p.parse_args(argv)
+    names = args.only or sections()
+    rows: list[Row] = []
+    failed = []
+    for name in names:
+        mod = importlib.import_module(f"benchmarks.{name}")
+        print(f"== {name}: {mod.__doc__.strip().splitlines()[0]}", file=sys.stderr, flush=True)
+        try:
+            rows.extend(mod.run(smoke=args.smoke))
+        except Exception:  # a broken section is reported, the others still run
+            failed.append(name)
+            traceback.print_exc()
+    text = table(rows)
+    print(text)
+    out = args.out or (None if args.smoke else HERE / "results.md")
+    if out is not None:
+        stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+        out.write_text(
+            f"# Benchmark results\n\nMeasured {stamp} on {machine_summary()}"
+            f"{' (smoke sizes)' if args.smoke else ''}.\nRatios are ours / peer, measured side by "
+            f"side in the same run: below 1 means ours is faster or smaller.\n\n{text}\n")
+        print(f"wrote {out}", file=sys.stderr)
+    if failed:
+        print(f"sections that failed: {', '.join(failed)}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
