@@ -51,6 +51,11 @@ def lab_server(tmp_path_factory):
     env = dict(os.environ, PATH=f"{bin_dir}{os.pathsep}{os.environ.get('PATH', '')}",
                JUPYTER_CONFIG_DIR=str(root / ".jupyter-config"))
     env.pop("MPLBACKEND", None)  # the notebooks choose ipympl themselves
+    # no "get notified about Jupyter news?" pop-up over the figures
+    settings = root / ".lab-settings" / "@jupyterlab" / "apputils-extension"
+    settings.mkdir(parents=True)
+    (settings / "notification.jupyterlab-settings").write_text('{"fetchNews": "false"}')
+    env["JUPYTERLAB_SETTINGS_DIR"] = str(root / ".lab-settings")
     log = open(root / "lab.log", "w")
     proc = subprocess.Popen(
         [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}",

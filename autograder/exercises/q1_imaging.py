@@ -1,0 +1,130 @@
+"""Q1 imaging modalities and B-scan artefacts: grading rules.
+
+Three graded functions of Q1(c) (``course_lib.ultrasound``) and the multiple-choice items of
+Q1(a) and Q1(b). The visible cases carry the exam's phantom (40 mm blocks of fat, liver and water
+under 10 mm of water, scanner at 1540 m/s); the hidden ones are drawn from ``rng``.
+"""
+
+from __future__ import annotations
+
+from course_lib import ultrasound
+
+from .base import Case, Exercise, close
+
+# speeds (m/s) and attenuations (dB/cm/MHz) of the course's material table
+_C = {name: p["c"] for name, p in ultrasound.MATERIALS.items()}
+_ALPHA = {name: p["alpha"] for name, p in ultrasound.MATERIALS.items()}
+
+
+def _displayed_thickness_cases(rng):
+    yield Case(args=(40.0, _C["fat"]), label="exam Q1(c): 40 mm of fat", visible=True)
+    yield Case(args=(40.0, _C["liver"]), label="exam Q1(c): 40 mm of liver", visible=True)
+    yield Case(args=(40.0, _C["water"]), label="exam Q1(c): 40 mm of water", visible=True)
+    yield Case(args=(25.0, 1540.0), label="speed equal to the assumed one", visible=True)
+    yield Case(args=(-1.0, 1450.0), label="negative thickness", raises=ValueError, visible=True)
+    # hidden: random scalars, batches, broadcasting, a different assumed speed, edges
+    for _ in range(5):
+        yield Case(args=(float(rng.uniform(0.1, 200.0)), float(rng.uniform(1300.0, 1700.0))),
+                   label="random layer")
+    yield Case(args=(rng.uniform(0.0, 100.0, 7), rng.uniform(1400.0, 1650.0, 7)),
+               label="batch of 7 layers")
+    yield Case(args=(rng.uniform(0.0, 100.0, (3, 4)), float(rng.uniform(1400.0, 1650.0))),
+               label="(3, 4) thicknesses, one speed (broadcast)")
+    yield Case(args=(rng.uniform(1.0, 50.0, 5), rng.uniform(1400.0, 1650.0, 5)),
+               kwargs={"c_assumed": float(rng.uniform(1450.0, 1600.0))},
+               label="a scanner assuming another speed")
+    yield Case(args=(0.0, 1578.0), label="zero thickness")
+    yield Case(args=(12.0, 4080.0), label="bone-like speed (displayed much too short)")
+    yield Case(args=(10.0, 0.0), label="zero speed", raises=ValueError)
+    yield Case(args=(10.0, -1450.0), label="negative speed", raises=ValueError)
+    yield Case(args=(10.0, 1450.0), kwargs={"c_assumed": 0.0}, label="zero assumed speed",
+               raises=ValueError)
+    yield Case(args=(rng.uniform(0, 10, 3), rng.uniform(1400, 1600, 4)),
+               label="shapes that do not broadcast", raises=ValueError)
+
+
+def _displayed_depths_cases(rng):
+    yield Case(args=((10.0, 40.0, 10.0), (_C["water"], _C["fat"], _C["water"])),
+               label="exam Q1(c): water, fat block, water down to the floor", visible=True)
+    yield Case(args=((10.0, 40.0, 10.0), (_C["water"], _C["liver"], _C["water"])),
+               label="exam Q1(c): water, liver block, water down to the floor", visible=True)
+    yield Case(args=((10.0, 20.0), (1500.0, 1600.0, 1540.0)), label="mismatched lengths",
+               raises=ValueError, visible=True)
+    # hidden
+    for n in (1, 2, 5, 9):
+        yield Case(args=(rng.uniform(0.5, 30.0, n), rng.uniform(1400.0, 1650.0, n)),
+                   label=f"random stack of {n} layers")
+    yield Case(args=(rng.uniform(0.5, 30.0, 4), rng.uniform(1400.0, 1650.0, 4)),
+               kwargs={"c_assumed": 1480.0}, label="scanner assuming 1480 m/s")
+    yield Case(args=((5.0, 0.0, 5.0), (1482.0, 1578.0, 1482.0)), label="a zero-thickness layer")
+    yield Case(args=([10.0, 20.0, 30.0], [1540.0, 1540.0, 1540.0]),
+               label="every layer at 1540 m/s (lists)")
+    yield Case(args=((10.0, -5.0), (1500.0, 1500.0)), label="negative thickness",
+               raises=ValueError)
+    yield Case(args=((10.0, 5.0), (1500.0, 0.0)), label="zero speed", raises=ValueError)
+    yield Case(args=(rng.uniform(1, 2, 3), rng.uniform(1400, 1600, 2)),
+               label="thicknesses longer than speeds", raises=ValueError)
+
+
+def _round_trip_cases(rng):
+    yield Case(args=(_ALPHA["fat"], 5.0, 4.0), label="exam phantom: 4 cm of fat at 5 MHz",
+               visible=True)
+    yield Case(args=((_ALPHA["water"], _ALPHA["liver"], _ALPHA["water"]), 5.0, (1.0, 4.0, 1.0)),
+               label="exam phantom: water, liver, water down to the floor at 5 MHz",
+               visible=True)
+    yield Case(args=((0.5, 0.6), 3.5, (1.0, 2.0, 3.0)), label="mismatched lengths",
+               raises=ValueError, visible=True)
+    # hidden
+    for _ in range(3):
+        yield Case(args=(float(rng.uniform(0.0, 2.0)), float(rng.uniform(1.0, 15.0)),
+                         float(rng.uniform(0.0, 10.0))), label="random single layer")
+    for n in (2, 6):
+        yield Case(args=(rng.uniform(0.0, 2.0, n), float(rng.uniform(1.0, 15.0)),
+                         rng.uniform(0.0, 5.0, n)), label=f"random stack of {n} layers")
+    yield Case(args=(0.5, 2.0, rng.uniform(0.1, 3.0, 4)),
+               label="one coefficient for every layer (scalar alpha)")
+    yield Case(args=((0.0, 0.0), 10.0, (3.0, 4.0)), label="lossless layers")
+    yield Case(args=((0.5, -0.1), 5.0, (1.0, 1.0)), label="negative attenuation",
+               raises=ValueError)
+    yield Case(args=(0.5, 0.0, 2.0), label="zero frequency", raises=ValueError)
+    yield Case(args=(0.5, -3.0, 2.0), label="negative frequency", raises=ValueError)
+    yield Case(args=((0.5, 0.6), 5.0, (1.0, -2.0)), label="negative thickness",
+               raises=ValueError)
+
+
+_rel = close(rtol=1e-6, atol=1e-9)
+_choices = ("a", "b", "c", "d")
+
+EXERCISES = [
+    Exercise(name="displayed_thickness", notebook="q1_imaging",
+             reference=ultrasound.displayed_thickness,
+             cases=lambda rng: list(_displayed_thickness_cases(rng)), compare=_rel,
+             description="Q1(c): thickness shown by a scanner assuming c_assumed"),
+    Exercise(name="displayed_depths", notebook="q1_imaging",
+             reference=ultrasound.displayed_depths,
+             cases=lambda rng: list(_displayed_depths_cases(rng)), compare=_rel,
+             description="Q1(c): displayed depth of the far face of each layer"),
+    Exercise(name="round_trip_attenuation_db", notebook="q1_imaging",
+             reference=ultrasound.round_trip_attenuation_db,
+             cases=lambda rng: list(_round_trip_cases(rng)), compare=_rel,
+             description="Q1(c): two-way attenuation in dB through a stack of layers"),
+    # Q1(a)(i): planar X-ray = line integral of attenuation
+    Exercise(name="xray_pixel_meaning", notebook="q1_imaging", kind="choice", answer="c",
+             options=_choices, description="Q1(a)(i) planar X-ray brightness"),
+    # Q1(a)(ii): CT = attenuation at one point (Hounsfield units)
+    Exercise(name="ct_pixel_meaning", notebook="q1_imaging", kind="choice", answer="b",
+             options=_choices, description="Q1(a)(ii) CT brightness"),
+    # Q1(a)(iii): PET = local rate of positron annihilations of the tracer
+    Exercise(name="pet_pixel_meaning", notebook="q1_imaging", kind="choice", answer="d",
+             options=_choices, description="Q1(a)(iii) PET brightness"),
+    # Q1(a)(iv): B-scan = local back-scatter, weakened by the attenuation above
+    Exercise(name="bscan_pixel_meaning", notebook="q1_imaging", kind="choice", answer="a",
+             options=_choices, description="Q1(a)(iv) B-scan brightness"),
+    # Q1(b): select all that apply
+    Exercise(name="pet_ct_reasons", notebook="q1_imaging", kind="choice",
+             answer=frozenset({"a", "c"}), options=_choices,
+             description="Q1(b) why combine PET and CT (all that apply)"),
+    # Q1(c): which way does the floor move under the liver
+    Exercise(name="floor_under_liver", notebook="q1_imaging", kind="choice", answer="b",
+             options=_choices, description="Q1(c) displayed bath floor under the liver"),
+]

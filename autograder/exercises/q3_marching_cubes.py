@@ -1,0 +1,297 @@
+"""Q3: marching cubes and volume estimation (notebook ``q3_marching_cubes``).
+
+Visible cases carry the exam's own numbers: the iso-level 10 between data values 7 and 13 of
+Q3(a) (the vertex is half way), the 256 patterns reducing to 15 cases in Q3(b), and a single
+inside sample whose isosurface is an octahedron (the simplest closed surface marching cubes
+makes, whose volume Q3(d)'s formula gives as 1/6).
+
+A marching-cubes mesh is only defined up to the order of its vertices, the order of its faces
+and the starting vertex of each face (and, since the contract does not fix it, the direction in
+which all faces are wound), so :func:`same_mesh` compares the set of vertices, the numbers of
+faces, closedness, and the enclosed volume and area.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from course_lib import marching_cubes as mc
+from course_lib import mesh
+
+from .base import Case, Exercise, close, describe
+
+NB = "q3_marching_cubes"
+
+
+# ------------------------------------------------------------------------------------------------
+# comparison rule for marching_cubes
+
+
+def _sorted_rows(a: np.ndarray, decimals: int = 6) -> np.ndarray:
+    r = np.round(a, decimals) + 0.0
+    return a[np.lexsort(r.T[::-1])] if len(a) else a
+
+
+def same_mesh(expected, received, atol: float = 1e-6, rtol: float = 1e-6) -> str | None:
+    """Meshes equal up to vertex order, face order, the start of each face and global winding.
+
+    Checks, in order: ``(verts (V, 3), faces (F, 3) int)``; indices in range; the same number
+    of vertices and faces; the same vertex positions as a set; every edge shared by two faces in
+    opposite directions exactly when the expected mesh is; the same absolute enclosed volume and
+    the same surface area.
+    """
+    if not isinstance(received, tuple) or len(received) != 2:
+        return f"wrong type (expected a tuple (verts, faces), got {describe(received)})"
+    ev, ef = expected
+    rv, rf = received
+    if not isinstance(rv, np.ndarray) or not isinstance(rf, np.ndarray):
+        return "verts and faces must be NumPy arrays"
+    if rv.size == 0:
+        rv = rv.reshape(0, 3)
+    if rv.ndim != 2 or rv.shape[1] != 3:
+        return f"verts must have shape (V, 3), got {rv.shape}"
+    if rv.dtype.kind not in "iuf":
+        return f"verts must be numbers, got dtype {rv.dtype}"
+    rv = rv.astype(float)
+    if rf.size == 0:
+        rf = rf.reshape(0, 3)
+    if rf.ndim != 2 or rf.shape[1] != 3:
+        return f"faces must have shape (F, 3), got {rf.shape}"
+    if rf.dtype.kind not in "iu":
+        if rf.dtype.kind == "f" and np.all(rf == np.round(rf)):
+            rf = rf.astype(np.int64)
+        else:
+            return f"faces must hold integer vertex indices, got dtype {rf.dtype}"
+    if rf.size and (rf.min() < 0 or rf.max() >= len(rv)):
+        return "faces index vertices that do not exist"
+    if len(rv) != len(ev):
+        return f"wrong number of vertices (expected {len(ev)}, one per crossed grid edge; got {len(rv)})"
+    if len(rf) != len(ef):
+        return f"wrong number of triangles (expected {len(ef)}, got {len(rf)})"
+    if not np.all(np.isfinite(rv)):
+        return "NaN or inf among the vertices"
+    if len(ev) and not np.allclose(_sorted_rows(rv), _sorted_rows(ev), atol=atol, rtol=0):
+        return ("the vertex positions differ (check the interpolation along each edge and the "
+                "mapping of index (i, j, k) to (i*sx, j*sy, k*sz))")
+    if len(ef) == 0:
+        return None
+    closed = mesh.is_closed_consistent(ef)
+    if mesh.is_closed_consistent(rf) != closed:
+        if closed:
+            return ("the mesh is not closed and consistently wound (vertices not shared between "
+                    "cells, or triangles ordered inconsistently)")
+        return "the mesh is closed where it should leave the volume"
+    if closed:
+        ve, vr = mesh.mesh_volume(ev, ef), mesh.mesh_volume(rv, rf)
+        if not np.isclose(abs(vr), abs(ve), rtol=rtol, atol=1e-9):
+            return f"wrong enclosed volume (expected {abs(ve):.6g}, got {abs(vr):.6g})"
+    ae, ar = mesh.surface_area(ev, ef), mesh.surface_area(rv, rf)
+    if not np.isclose(ar, ae, rtol=rtol, atol=1e-9):
+        return f"wrong surface area (expected {ae:.6g}, got {ar:.6g}): different triangles"
+    return None
+
+
+def same_bool(expected, received) -> str | None:
+    """A Python bool (NumPy's ``np.bool_`` accepted) equal to the expected one."""
+    if not isinstance(received, bool):
+        return f"wrong type (expected True or False, got {describe(received)})"
+    return None if received == expected else f"wrong answer (expected {expected})"
+
+
+# ------------------------------------------------------------------------------------------------
+# random inputs
+
+
+def _smooth_field(rng, shape, n_bumps=3):
+    """A sum of broad Gaussian bumps, negated so that the bumps are 'inside' (low values)."""
+    grid = np.stack(np.meshgrid(*[np.arange(s, dtype=float) for s in shape], indexing="ij"), -1)
+    out = np.zeros(shape)
+    for _ in range(n_bumps):
+        c = rng.uniform(0.25, 0.75, 3) * (np.array(shape) - 1)
+        w = rng.uniform(0.2, 0.35) * min(shape)
+        out -= rng.uniform(0.5, 1.5) * np.exp(-np.sum((grid - c) ** 2, -1) / (2 * w * w))
+    return out
+
+
+def _iso_between(rng, vol):
+    """An iso-level inside the data range that equals no sample (no degenerate vertices)."""
+    lo, hi = np.quantile(vol, [0.15, 0.5])
+    iso = rng.uniform(lo, hi)
+    while np.any(np.abs(vol - iso) < 1e-7):
+        iso += 1e-5
+    return float(iso)
+
+
+def _closed_meshes(rng):
+    """Closed, outward meshes: a tetrahedron, an octahedron and a box, randomly placed."""
+    tet_v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    tet_f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    oct_v = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
+    oct_f = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4],
+                      [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
+    box_v = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    box_f = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                      [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    out = []
+    for v, f in ((tet_v, tet_f), (oct_v, oct_f), (box_v, box_f)):
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        if np.linalg.det(q) < 0:
+            q[:, 0] *= -1                                  # a rotation keeps the orientation
+        v2 = (v * rng.uniform(0.5, 3.0, 3)) @ q.T + rng.normal(scale=3.0, size=3)
+        out.append((v2, f.copy()))
+    return out
+
+
+# ------------------------------------------------------------------------------------------------
+# cases
+
+
+def _interpolate_cases(rng):
+    yield Case(args=(np.array([0.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]), 7.0, 13.0, 10.0),
+               label="exam Q3(a): iso 10 between 7 and 13 is half way", visible=True)
+    yield Case(args=(np.array([2.0, 3.0, 4.0]), np.array([2.0, 5.0, 4.0]), 13.0, 7.0, 8.5),
+               label="values decreasing along the edge", visible=True)
+    p0, p1 = rng.normal(size=(6, 3)), rng.normal(size=(6, 3))
+    v0, v1 = rng.uniform(-5, 0, 6), rng.uniform(1, 5, 6)
+    yield Case(args=(p0, p1, v0, v1, 0.5), label="batch of 6 edges, one iso-level")
+    yield Case(args=(p0, p1, v1, v0, rng.uniform(0.0, 1.0, 6)), label="batch, iso per edge")
+    yield Case(args=(p0[0], p1[0], float(v0[0]), float(v1[0]), float(v0[0])),
+               label="iso equal to v0 gives p0")
+    yield Case(args=(p0[1], p1[1], 2.0, 2.0, 2.0), label="flat edge at the iso-level gives p0")
+    yield Case(args=(p0[0], p1[0], 2.0, 2.0, 3.0), label="flat edge, no crossing",
+               raises=ValueError)
+    yield Case(args=(p0[0], p1[0], 0.0, 1.0, 2.0), label="iso off the edge", raises=ValueError)
+    yield Case(args=(np.zeros(2), np.ones(2), 0.0, 1.0, 0.5), label="2-D points",
+               raises=ValueError)
+
+
+def _cube_index_cases(rng):
+    yield Case(args=(np.array([0.0, 9, 9, 9, 9, 9, 9, 9]), 5.0), label="corner 0 inside",
+               visible=True)
+    yield Case(args=(np.array([7.0, 13, 13, 7, 13, 7, 7, 13]), 10.0),
+               label="corners 0, 3, 5, 6 below 10", visible=True)
+    yield Case(args=(np.full(8, 10.0), 10.0), label="all equal to iso: none below it")
+    for _ in range(3):
+        yield Case(args=(rng.uniform(0, 1, 8), float(rng.uniform(0.2, 0.8))), label="random cell")
+    yield Case(args=(rng.uniform(0, 1, (5, 8)), 0.5), label="batch of 5 cells")
+    yield Case(args=(rng.uniform(0, 1, (2, 3, 8)), 0.3), label="batch of 2 x 3 cells")
+    yield Case(args=(np.zeros(7), 0.5), label="7 values", raises=ValueError)
+
+
+def _symmetry_cases(rng):
+    yield Case(args=(True, False), label="rotations and complement (exam Q3(b))", visible=True)
+    yield Case(args=(False, False), label="rotations only")
+    yield Case(args=(False, True), label="rotations and reflections")
+    yield Case(args=(True, True), label="rotations, reflections and complement")
+
+
+def _marching_cases(rng):
+    vol = np.ones((3, 3, 3))
+    vol[1, 1, 1] = 0.0
+    yield Case(args=(vol, 0.5), label="one inside sample: an octahedron", visible=True)
+    sphere = mc.sphere_field((7, 7, 7), (3.1, 2.9, 3.05))
+    yield Case(args=(sphere, 5.3), label="small sphere, radius sqrt(5.3)", visible=True)
+    yield Case(args=(sphere, 5.3, (0.5, 1.0, 2.0)), label="the same sphere, spacing (0.5, 1, 2)",
+               visible=True)
+    for k in range(3):
+        shape = tuple(int(n) for n in rng.integers(5, 9, 3))
+        field = _smooth_field(rng, shape)
+        yield Case(args=(field, _iso_between(rng, field)), label=f"smooth random field {k + 1}")
+    field = _smooth_field(rng, (6, 7, 5))
+    yield Case(args=(field, _iso_between(rng, field), tuple(rng.uniform(0.3, 2.0, 3))),
+               label="smooth field, anisotropic spacing")
+    torus = mc.torus_field((12, 12, 6), (5.6, 5.4, 2.6), 3.6)
+    yield Case(args=(torus, 1.7 ** 2), label="a torus (genus one)")
+    yield Case(args=(field, float(field.min()) - 1.0), label="iso below the data: empty mesh")
+    yield Case(args=(np.zeros((4, 4)), 0.5), label="2-D volume", raises=ValueError)
+    yield Case(args=(field, 0.5, (1.0, 0.0, 1.0)), label="zero spacing", raises=ValueError)
+
+
+def _prism_cases(rng):
+    yield Case(args=(np.array([0.0, 0, 2]), np.array([1.0, 0, 2]), np.array([0.0, 1, 2]),
+                     np.array([0.0, 0, 1])),
+               label="unit right triangle at height 2: area 1/2 x height 2", visible=True)
+    yield Case(args=(np.array([0.0, 0, 2]), np.array([0.0, 1, 2]), np.array([1.0, 0, 2]),
+                     np.array([0.0, 0, 5])),
+               label="the same, wound the other way, n not unit", visible=True)
+    a, b, c = rng.normal(size=(3, 8, 3))
+    yield Case(args=(a[0], b[0], c[0], rng.normal(size=3)), label="random triangle, random n")
+    yield Case(args=(a, b, c, rng.normal(size=3) * 4), label="batch of 8, one n (not unit)")
+    yield Case(args=(a, b, c, rng.normal(size=(8, 3))), label="batch of 8, n per triangle")
+    yield Case(args=(a[0], b[0], c[0], np.zeros(3)), label="zero n", raises=ValueError)
+    yield Case(args=(a[0, :2], b[0], c[0], np.array([0.0, 0, 1])), label="2-D vertex",
+               raises=ValueError)
+
+
+def _volume_cases(rng):
+    meshes = _closed_meshes(rng)
+    tet_v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    tet_f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    yield Case(args=(tet_v, tet_f), label="unit tetrahedron: volume 1/6", visible=True)
+    yield Case(args=(tet_v, tet_f[:, ::-1]), label="the same, wound inwards: -1/6", visible=True)
+    for (v, f), name in zip(meshes, ("tetrahedron", "octahedron", "box")):
+        yield Case(args=(v, f), label=f"random {name}, default n")
+        yield Case(args=(v, f, rng.normal(size=3)), label=f"random {name}, random n")
+    v, f = meshes[1]
+    yield Case(args=(v, f[1:], np.array([1.0, 2.0, 0.5])), label="open mesh (one face missing)")
+    yield Case(args=(tet_v, np.array([[0, 1, 4]])), label="face index out of range",
+               raises=ValueError)
+    yield Case(args=(tet_v[:, :2], tet_f), label="2-D vertices", raises=ValueError)
+
+
+def _closed_cases(rng):
+    tet_f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    yield Case(args=(tet_f,), label="tetrahedron", visible=True)
+    flipped = tet_f.copy()
+    flipped[0] = flipped[0, ::-1]
+    yield Case(args=(flipped,), label="one face flipped", visible=True)
+    yield Case(args=(tet_f[1:],), label="one face missing", visible=True)
+    perm = rng.permutation(8)
+    box_f = _closed_meshes(rng)[2][1]
+    yield Case(args=(perm[box_f],), label="box, vertices renumbered")
+    yield Case(args=(np.vstack([perm[box_f], perm[box_f[:1]]]),), label="a face repeated")
+    yield Case(args=(np.vstack([perm[box_f], perm[box_f][:, ::-1]]),),
+               label="box and its inside-out copy (each edge used four times)")
+    two = np.vstack([tet_f, tet_f + 4])
+    yield Case(args=(two[rng.permutation(8)],), label="two tetrahedra, faces shuffled")
+    yield Case(args=(np.array([[0, 1]]),), label="faces of 2 vertices", raises=ValueError)
+
+
+# ------------------------------------------------------------------------------------------------
+# the registry
+
+
+def _choice(name, answer, description, options=("a", "b", "c", "d")):
+    return Exercise(name=name, notebook=NB, kind="choice", answer=answer, options=options,
+                    description=description)
+
+
+EXERCISES = [
+    Exercise(name="interpolate_edge", notebook=NB, reference=mc.interpolate_edge,
+             cases=lambda rng: list(_interpolate_cases(rng)), compare=close(rtol=1e-9, atol=1e-9),
+             description="Q3(a) vertex position by linear interpolation along an edge"),
+    Exercise(name="cube_index", notebook=NB, reference=mc.cube_index,
+             cases=lambda rng: list(_cube_index_cases(rng)), compare=close(rtol=0, atol=0),
+             description="Q3(b) the 8-bit case number"),
+    Exercise(name="count_symmetry_classes", notebook=NB, reference=mc.count_symmetry_classes,
+             cases=lambda rng: list(_symmetry_cases(rng)), compare=close(rtol=0, atol=0),
+             description="Q3(b) 256 patterns into classes"),
+    Exercise(name="marching_cubes", notebook=NB, reference=mc.marching_cubes,
+             cases=lambda rng: list(_marching_cases(rng)), compare=same_mesh,
+             description="Q3(a)-(c) the whole algorithm"),
+    Exercise(name="triangle_projected_volume", notebook=NB,
+             reference=mesh.triangle_projected_volume,
+             cases=lambda rng: list(_prism_cases(rng)), compare=close(rtol=1e-9, atol=1e-12),
+             description="Q3(d) equation (4)"),
+    Exercise(name="mesh_volume", notebook=NB, reference=mesh.mesh_volume,
+             cases=lambda rng: list(_volume_cases(rng)), compare=close(rtol=1e-9, atol=1e-12),
+             description="Q3(d) sum of equation (4) over the faces"),
+    Exercise(name="is_closed_consistent", notebook=NB, reference=mesh.is_closed_consistent,
+             cases=lambda rng: list(_closed_cases(rng)), compare=same_bool,
+             description="Q3(d) the closed and consistently ordered condition"),
+    _choice("q3a_vertex_position", "b", "Q3(a) where on the edge the vertex goes"),
+    _choice("q3b_cases", "c", "Q3(b) how many cases, how many with triangles"),
+    _choice("q3c_ambiguous", "a", "Q3(c) which cases are ambiguous"),
+    _choice("q3c_hole", "a", "Q3(c) what the ambiguity is and what goes wrong"),
+    _choice("q3d_conditions", "a", "Q3(d) conditions for the volume to be meaningful"),
+]

@@ -1,0 +1,177 @@
+"""Q4: terminating Catmull-Rom splines and B-splines (notebook ``q4_splines``).
+
+Visible cases carry the exam's own rows (Q4(b): a, b, c, d as the unit vectors of R^4 turn
+``p, p', p''`` into the weight rows ``[0 0 1 0]``, ``[0 -1/2 0 1/2]``, ``[-1 4 -5 2]``) and the
+end conditions of Q4(c); hidden cases draw random geometry in 2-D and 3-D, scalar and array
+``t``, orders 0..2, every end rule, and bad input that must raise ``ValueError``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from course_lib import splines
+
+from .base import Case, Exercise, close
+
+NB = "q4_splines"
+RULES = ("d=b", "d=2c-b", "d=c")
+KINDS = ("catmull-rom", "b-spline")
+_CR = splines.catmull_rom_basis()
+_BS = splines.bspline_basis()
+_COMPARE = close(rtol=1e-7, atol=1e-9)
+
+
+def _basis_cases(name):
+    def cases(rng):
+        return [Case(args=(), label=f"the {name} basis matrix (4 x 4)", visible=True)]
+    return cases
+
+
+def _parameter_row_cases(rng):
+    for k in range(3):
+        yield Case(args=(1.0,), kwargs={"order": k}, visible=True,
+                   label=f"exam Q4(b): t = 1, order {k} ([1 1 1 1], [3 2 1 0], [6 2 0 0])")
+    yield Case(args=(0.0,), label="t = 0, default order", visible=True)
+    yield Case(args=(np.array([0.0, 0.5, 1.0]),), kwargs={"order": 1}, visible=True,
+               label="array of 3 values of t, order 1")
+    for k in range(3):
+        yield Case(args=(float(rng.uniform(0, 1)),), kwargs={"order": k},
+                   label=f"random scalar t, order {k}")
+        n = int(rng.integers(2, 12))
+        yield Case(args=(rng.uniform(-0.5, 1.5, n),), kwargs={"order": k},
+                   label=f"array of {n} values of t (some outside [0, 1]), order {k}")
+    yield Case(args=(np.array([0.25]),), kwargs={"order": 2}, label="array of one value")
+    yield Case(args=(0.5,), kwargs={"order": 3}, label="order 3", raises=ValueError)
+    yield Case(args=(0.5,), kwargs={"order": -1}, label="order -1", raises=ValueError)
+
+
+def _spline_eval_cases(rng):
+    eye = np.eye(4)
+    for k in range(3):
+        yield Case(args=(_CR, eye, 1.0), kwargs={"order": k}, visible=True,
+                   label=f"exam Q4(b): Catmull-Rom, G = identity, t = 1, order {k}")
+        yield Case(args=(_BS, eye, 1.0), kwargs={"order": k}, visible=True,
+                   label=f"exam Q4(b): B-spline, G = identity, t = 1, order {k}")
+    for dim in (2, 3):
+        for k in range(3):
+            M = _CR if rng.random() < 0.5 else _BS
+            G = rng.normal(scale=5.0, size=(4, dim))
+            yield Case(args=(M, G, float(rng.uniform(0, 1))), kwargs={"order": k},
+                       label=f"random {dim}-D geometry, scalar t, order {k}")
+            n = int(rng.integers(2, 10))
+            yield Case(args=(M, G, rng.uniform(0, 1, n)), kwargs={"order": k},
+                       label=f"random {dim}-D geometry, {n} values of t, order {k}")
+    yield Case(args=(rng.normal(size=(4, 4)), rng.normal(size=(4, 2)), 0.3),
+               label="another basis matrix (any 4 x 4 M)")
+    yield Case(args=(_CR, rng.normal(size=(3, 2)), 0.5), label="G with 3 rows",
+               raises=ValueError)
+    yield Case(args=(np.eye(3), rng.normal(size=(4, 2)), 0.5), label="M of shape (3, 3)",
+               raises=ValueError)
+    yield Case(args=(_BS, rng.normal(size=(4, 2)), 0.5), kwargs={"order": 3}, label="order 3",
+               raises=ValueError)
+
+
+def _end_derivatives_cases(rng):
+    e = tuple(np.eye(4))
+    yield Case(args=(_CR, *e), visible=True,
+               label="exam Q4(b): Catmull-Rom rows [0 0 1 0], [0 -1/2 0 1/2], [-1 4 -5 2]")
+    yield Case(args=(_BS, *e), visible=True,
+               label="exam Q4(b): B-spline rows (b + 4c + d)/6, (d - b)/2, b - 2c + d")
+    b, c = np.array([1.0, 2.0]), np.array([3.0, 3.0])
+    yield Case(args=(_CR, np.array([0.0, 0.0]), b, c, b), visible=True,
+               label="exam Q4(c)(i): Catmull-Rom with d = b")
+    yield Case(args=(_BS, np.array([0.0, 0.0]), b, c, 2 * c - b), visible=True,
+               label="exam Q4(c)(i): B-spline with d = 2c - b")
+    for dim in (2, 3):
+        for M, name in ((_CR, "Catmull-Rom"), (_BS, "B-spline")):
+            a, b, c, d = rng.normal(scale=5.0, size=(4, dim))
+            yield Case(args=(M, a, b, c, d), label=f"{name}, random {dim}-D points")
+    n = int(rng.integers(2, 8))
+    yield Case(args=(_BS, *rng.normal(size=(4, n, 3))), label=f"B-spline, batch of {n} (n, 3)")
+    yield Case(args=(_CR, np.zeros(2), np.ones(2), np.ones(3), np.ones(2)),
+               label="points of different shapes", raises=ValueError)
+
+
+def _phantom_point_cases(rng):
+    b, c = np.array([1.0, 2.0]), np.array([3.0, 3.0])
+    for rule in RULES:
+        yield Case(args=(b, c, rule), visible=True, label=f"rule {rule!r}, 2-D")
+    for rule in RULES:
+        dim = int(rng.integers(2, 4))
+        yield Case(args=(*rng.normal(scale=5.0, size=(2, dim)), rule),
+                   label=f"rule {rule!r}, random {dim}-D points")
+        n = int(rng.integers(2, 6))
+        yield Case(args=(*rng.normal(size=(2, n, 3)), rule),
+                   label=f"rule {rule!r}, batch of {n} (n, 3)")
+    yield Case(args=(b, c, "d=a"), label="unknown rule 'd=a'", raises=ValueError)
+    yield Case(args=(b, c, "natural"), label="unknown rule 'natural'", raises=ValueError)
+
+
+def _sample_curve_cases(rng):
+    P4 = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 1.0], [3.0, 1.0]])
+    yield Case(args=(P4, "catmull-rom", 2), visible=True,
+               label="one Catmull-Rom segment: runs from the 2nd point to the 3rd")
+    P5 = np.array([[0.0, 0.0], [1.0, 2.0], [3.0, 2.5], [4.0, 0.5], [6.0, 1.0]])
+    yield Case(args=(P5, "b-spline", 4), kwargs={"end_rule": "d=2c-b"}, visible=True,
+               label="B-spline with d = 2c - b at both ends: from the first point to the last")
+    yield Case(args=(P5, "b-spline", 4), kwargs={"end_rule": "d=b"}, visible=True,
+               label="B-spline with d = b at both ends")
+    for kind in KINDS:
+        for rule in (None, *RULES):
+            dim = int(rng.integers(2, 4))
+            m = int(rng.integers(2 if rule else 4, 8))
+            n = int(rng.integers(1, 9))
+            yield Case(args=(rng.normal(scale=5.0, size=(m, dim)), kind, n),
+                       kwargs={"end_rule": rule},
+                       label=f"{kind}, {m} random {dim}-D points, {n} per segment, "
+                             f"end_rule={rule!r}")
+    yield Case(args=(P5, "catmull-rom", 3), label="end_rule left at its default")
+    yield Case(args=(P5, "bezier", 4), label="unknown kind 'bezier'", raises=ValueError)
+    yield Case(args=(P5[:3], "b-spline", 4), label="3 points and no end rule",
+               raises=ValueError)
+    yield Case(args=(P5[:1], "catmull-rom", 4), kwargs={"end_rule": "d=b"},
+               label="one point with an end rule", raises=ValueError)
+    yield Case(args=(P5, "b-spline", 4), kwargs={"end_rule": "d=a"}, label="unknown rule",
+               raises=ValueError)
+    yield Case(args=(P5, "b-spline", 0), label="n_per_segment = 0", raises=ValueError)
+    yield Case(args=(P5[:, 0], "b-spline", 4), label="points of shape (m,)", raises=ValueError)
+
+
+def _function(name, reference, cases, description):
+    return Exercise(name=name, notebook=NB, reference=reference,
+                    cases=lambda rng: list(cases(rng)), compare=_COMPARE,
+                    description=description)
+
+
+EXERCISES = [
+    _function("catmull_rom_basis", splines.catmull_rom_basis, _basis_cases("Catmull-Rom"),
+              "Q4(b) the Catmull-Rom basis matrix"),
+    _function("bspline_basis", splines.bspline_basis, _basis_cases("B-spline"),
+              "Q4(b) the uniform cubic B-spline basis matrix"),
+    _function("parameter_row", splines.parameter_row, _parameter_row_cases,
+              "Q4(b) [t^3, t^2, t, 1] and its derivatives"),
+    _function("end_derivatives", splines.end_derivatives, _end_derivatives_cases,
+              "Q4(b) p, p', p'' at t = 1"),
+    _function("spline_eval", splines.spline_eval, _spline_eval_cases,
+              "Q4(c)(i) one segment's position or derivative"),
+    _function("phantom_point", splines.phantom_point, _phantom_point_cases,
+              "Q4(c)(i) the invented end point d"),
+    _function("sample_curve", splines.sample_curve, _sample_curve_cases,
+              "Q4(c)(i) a multi-segment curve with or without phantom end points"),
+    Exercise(name="q4a_segments", notebook=NB, kind="choice", answer="c",
+             options=("a", "b", "c", "d"),
+             description="Q4(a) control points needed for N segments: N + 3"),
+    Exercise(name="q4a_properties", notebook=NB, kind="choice",
+             answer=frozenset({"a", "c", "e"}), options=("a", "b", "c", "d", "e"),
+             description="Q4(a) interpolation, continuity, convex hull, shared geometry"),
+    Exercise(name="q4ci_bspline_end", notebook=NB, kind="choice", answer="c",
+             options=("a", "b", "c", "d"),
+             description="Q4(c)(i) with d = b the B-spline stops 2/3 of the way from b to c"),
+    Exercise(name="q4cii_catmull_rule", notebook=NB, kind="choice", answer="a",
+             options=("a", "b", "c", "d"),
+             description="Q4(c)(ii) d = b suits Catmull-Rom: the end tangent is not imposed"),
+    Exercise(name="q4cii_bspline_rule", notebook=NB, kind="choice", answer="b",
+             options=("a", "b", "c", "d"),
+             description="Q4(c)(ii) B-spline: rest at (b+2c)/3 vs reaching c with speed"),
+]

@@ -1,0 +1,309 @@
+"""Keep nbgrader's gradebook and ``autograded/`` notebooks in step with the hardened grader.
+
+nbgrader stays the instructors' workflow: formgrader reads the gradebook for the scores and the
+``autograded/<student>/tripos2006/<notebook>.ipynb`` notebooks for manual grading. After
+``python -m autograder grade`` this module
+
+- makes sure the gradebook knows the assignment and every grade cell (through
+  :func:`autograder.course.prepare_course`, which runs ``nbgrader generate_assignment``, when it
+  does not yet);
+- registers each student and submission and sets the ``auto_score`` of every auto-graded test
+  cell to the sandboxed score (manual answer cells stay "needs manual grade");
+- writes the autograded notebooks: the student's cells with every *trusted* cell (setup, tests,
+  locked text) restored from the source by ``grade_id`` (hidden tests removed, so even nbgrader's
+  own ``generate_feedback`` cannot leak them), duplicates demoted to plain cells, cells whose
+  metadata was stripped re-tagged, missing cells re-inserted, outputs cleared, and each test cell
+  carrying the grader's verdict as its output.
+
+The course root is the folder holding ``SUBMITTED`` when that is an nbgrader course
+(``<root>/submitted`` next to ``<root>/source/tripos2006``), otherwise ``OUT``; the gradebook is
+``sqlite:///<root>/gradebook.db`` unless ``--db-url`` names another (PostgreSQL for a shared
+server: nbgrader's FAQ advises against SQLite with several writers; this module is the only
+writer during a grading run).
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import re
+import shutil
+import sys
+from pathlib import Path
+
+from .grading import ASSIGNMENT, Batch, CellResult, SourceNotebook, Submission
+
+COURSE_ID = "4f9"
+_HIDDEN = re.compile(r"^[ \t]*###\s*BEGIN HIDDEN TESTS.*?^[ \t]*###\s*END HIDDEN TESTS[^\n]*\n?",
+                     re.S | re.M)
+HIDDEN_NOTE = ("# hidden tests: run outside the notebook by `python -m autograder grade` "
+               "(see the grader's verdict below)\n")
+
+
+def course_root(submitted: Path, out: Path) -> Path:
+    """The nbgrader course root for a grading run (see the module docstring)."""
+    submitted = Path(submitted).resolve()
+    if submitted.name == "submitted" and (submitted.parent / "source" / ASSIGNMENT).is_dir():
+        return submitted.parent
+    return Path(out).resolve()
+
+
+def default_db_url(root: Path) -> str:
+    return f"sqlite:///{Path(root).resolve() / 'gradebook.db'}"
+
+
+def strip_hidden(source: str) -> str:
+    """A test cell's source without its hidden tests (replaced by a one-line note)."""
+    return _HIDDEN.sub(HIDDEN_NOTE, source)
+
+
+def gradebook_knows(db_url: str, sources: list[SourceNotebook]) -> bool:
+    """Whether the gradebook already holds the assignment with every grade cell of ``sources``."""
+    from nbgrader.api import Gradebook, MissingEntry
+
+    try:
+        with Gradebook(db_url, course_id=COURSE_ID) as gb:
+            try:
+                gb.find_assignment(ASSIGNMENT)
+            except MissingEntry:
+                return False
+            for src in sources:
+                for gid in [g[1] for g in src.graded] + [m[0] for m in src.manual]:
+                    try:
+                        gb.find_grade_cell(gid, src.name, ASSIGNMENT)
+                    except MissingEntry:
+                        return False
+    except Exception:  # noqa: BLE001 - an empty or foreign database: (re)create the course
+        return False
+    return True
+
+
+def ensure_course(root: Path, db_url: str, sources: list[SourceNotebook]) -> None:
+    """Register the assignment and its cells in the gradebook (``nbgrader generate_assignment``)."""
+    if gradebook_knows(db_url, sources):
+        return
+    try:
+        from .course import prepare_course
+
+        prepare_course(root, db_url=db_url, notebooks=[s.path for s in sources])
+    except Exception as exc:  # noqa: BLE001 - e.g. a source notebook nbgrader cannot release
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        print(f"warning: nbgrader generate_assignment failed ({first}); registering the "
+              "grade cells in the gradebook directly", file=sys.stderr)
+        register_cells(db_url, sources)
+    if not gradebook_knows(db_url, sources):
+        raise RuntimeError("nbgrader generate_assignment ran but the gradebook still lacks "
+                           "some grade cells")
+
+
+def register_cells(db_url: str, sources: list[SourceNotebook]) -> None:
+    """Record the assignment's cells in the gradebook the way ``generate_assignment`` does
+    (nbgrader's own ``ComputeChecksums`` and ``SaveCells`` preprocessors), without releasing."""
+    import nbformat
+    from nbgrader.api import Gradebook
+    from nbgrader.preprocessors import ComputeChecksums, SaveCells
+
+    with Gradebook(db_url, course_id=COURSE_ID) as gb:
+        gb.update_or_create_assignment(ASSIGNMENT)
+    for src in sources:
+        nb = nbformat.read(str(src.path), as_version=4)
+        resources = {"nbgrader": {"db_url": db_url, "assignment": ASSIGNMENT,
+                                  "notebook": src.name}}
+        nb, resources = ComputeChecksums().preprocess(nb, resources)
+        SaveCells().preprocess(nb, resources)
+
+
+def sync(batch: Batch, sources: list[SourceNotebook], submitted: Path, out: Path,
+         db_url: str | None = None) -> Path:
+    """Write every score of ``batch`` to the gradebook and the autograded notebooks.
+
+    Returns the course root used. Idempotent: re-running with the same batch changes nothing.
+    """
+    from nbgrader.api import Gradebook, MissingEntry
+
+    root = course_root(submitted, out)
+    db_url = db_url or default_db_url(root)
+    ensure_course(root, db_url, sources)
+    by_student: dict[str, list[CellResult]] = {}
+    for r in batch.results:
+        by_student.setdefault(r.student, []).append(r)
+    with Gradebook(db_url, course_id=COURSE_ID) as gb:
+        for student in batch.students:
+            gb.update_or_create_student(student)
+            timestamp = _timestamp(Path(submitted) / student / ASSIGNMENT)
+            try:
+                sub = gb.find_submission(ASSIGNMENT, student)
+                if timestamp is not None:
+                    sub.timestamp = timestamp
+            except MissingEntry:
+                kwargs = {"timestamp": timestamp} if timestamp is not None else {}
+                gb.add_submission(ASSIGNMENT, student, **kwargs)
+            for r in by_student.get(student, []):
+                try:
+                    grade = gb.find_grade(r.grade_id, r.notebook, ASSIGNMENT, student)
+                except MissingEntry:
+                    continue
+                if r.kind == "manual":
+                    grade.auto_score = None if r.status == "manual" else 0.0
+                    grade.needs_manual_grade = r.status == "manual" or grade.manual_score is not None
+                else:
+                    grade.auto_score = float(r.score or 0.0)
+                    grade.needs_manual_grade = grade.manual_score is not None
+            gb.db.commit()
+    for student in batch.students:
+        folder = root / "autograded" / student / ASSIGNMENT
+        folder.mkdir(parents=True, exist_ok=True)
+        ts = Path(submitted) / student / ASSIGNMENT / "timestamp.txt"
+        if ts.is_file() and not ts.is_symlink():
+            shutil.copyfile(ts, folder / "timestamp.txt")
+        results = {}
+        for r in by_student.get(student, []):
+            results.setdefault(r.notebook, {})[r.grade_id] = r
+        for src in sources:
+            sub = batch.submissions.get((student, src.name))
+            if sub is None:
+                continue
+            nb = autograded_notebook(src, sub, results.get(src.name, {}))
+            with open(folder / f"{src.name}.ipynb", "w", encoding="utf-8") as f:
+                json.dump(nb, f, indent=1, ensure_ascii=False)
+                f.write("\n")
+    return root
+
+
+def _timestamp(folder: Path):
+    ts = folder / "timestamp.txt"
+    if not ts.is_file() or ts.is_symlink():
+        return None
+    try:
+        from nbgrader.utils import parse_utc
+
+        return parse_utc(ts.read_text(encoding="utf-8")[:100].strip())
+    except Exception:  # noqa: BLE001 - a garbled timestamp is simply not recorded
+        return None
+
+
+# --------------------------------------------------------------------------------------------
+# the autograded notebook
+
+
+def _source_cell_json(src: SourceNotebook, index: int) -> dict:
+    return copy.deepcopy(src.nb["cells"][index])
+
+
+def _is_trusted(meta: dict) -> bool:
+    """Cells the student may not change: locked cells and auto-graded test cells."""
+    return bool(meta.get("locked")) or (bool(meta.get("grade")) and not meta.get("solution"))
+
+
+def _clean(cell: dict) -> dict:
+    cell = copy.deepcopy(cell)
+    cell.setdefault("metadata", {})
+    if not isinstance(cell["metadata"], dict):
+        cell["metadata"] = {}
+    if cell.get("cell_type") == "code":
+        cell["outputs"] = []
+        cell["execution_count"] = None
+    else:
+        cell.pop("outputs", None)
+        cell.pop("execution_count", None)
+    if isinstance(cell.get("source"), list):
+        cell["source"] = "".join(cell["source"])
+    cell.pop("id", None)
+    return cell
+
+
+def _verdict_output(r: CellResult) -> dict:
+    score = "-" if r.score is None else f"{r.score:g}"
+    text = f"autograder: {score} / {r.max_score:g} [{r.status}] {r.message}\n"
+    return {"output_type": "stream", "name": "stdout", "text": text}
+
+
+def autograded_notebook(src: SourceNotebook, sub: Submission,
+                        results: dict[str, CellResult]) -> dict:
+    """The notebook formgrader shows for one submission (see the module docstring)."""
+    if sub.status != "ok" or sub.nb is None:
+        cells = [{"cell_type": "markdown", "metadata": {},
+                  "source": f"**Not graded automatically:** {sub.message}"}]
+        for c in src.nb["cells"]:
+            c = _clean(c)
+            meta = c["metadata"].get("nbgrader", {})
+            if meta.get("solution"):
+                c["source"] = ("*(not submitted)*" if c["cell_type"] == "markdown"
+                               else "# (not submitted)\n")
+            elif meta.get("grade") and c["cell_type"] == "code":
+                c["source"] = strip_hidden(c["source"])
+            cells.append(c)
+    else:
+        cells = _merge(src, sub)
+    for c in cells:
+        gid = (c.get("metadata", {}).get("nbgrader") or {}).get("grade_id")
+        if gid in results and c.get("cell_type") == "code" and results[gid].kind != "manual":
+            c["outputs"] = [_verdict_output(results[gid])]
+    return {"cells": cells, "metadata": copy.deepcopy(src.nb.get("metadata", {})),
+            "nbformat": 4, "nbformat_minor": int(src.nb.get("nbformat_minor", 5))
+            if isinstance(src.nb.get("nbformat_minor"), int) else 5}
+
+
+def _merge(src: SourceNotebook, sub: Submission) -> list[dict]:
+    from .grading import plan_cells
+
+    plan = plan_cells(src, sub)
+    by_name = {k: name for name, k in plan.chosen.items() if plan.found.get(name) == "by-name"}
+    last: dict[str, int] = {}
+    for k, c in enumerate(sub.cells):
+        if c["grade_id"]:
+            last[c["grade_id"]] = k
+    cells: list[dict] = []
+    present: set[str] = set()
+    for k, c in enumerate(sub.cells):
+        cell = _clean(c["raw"])
+        gid = c["grade_id"]
+        scell = src.cell(gid) if gid else None
+        if gid and last[gid] != k:
+            cell["metadata"].pop("nbgrader", None)       # an earlier duplicate: a plain cell
+        elif scell is not None and _is_trusted(scell.meta):
+            cell = _clean(_source_cell_json(src, scell.index))
+            if cell["cell_type"] == "code":
+                cell["source"] = strip_hidden(cell["source"])
+            present.add(gid)
+        elif scell is not None:
+            cell["metadata"]["nbgrader"] = copy.deepcopy(scell.meta)
+            cell["cell_type"] = scell.cell_type if scell.cell_type in ("code", "markdown") \
+                else cell["cell_type"]
+            if cell["cell_type"] == "markdown":
+                cell.pop("outputs", None)
+                cell.pop("execution_count", None)
+            present.add(gid)
+        elif gid:
+            cell["metadata"].pop("nbgrader", None)       # a grade_id the course does not know
+        elif k in by_name:
+            meta = src.cell(by_name[k])
+            if meta is not None:
+                cell["metadata"]["nbgrader"] = copy.deepcopy(meta.meta)
+                present.add(by_name[k])
+        cells.append(cell)
+    # re-insert the graded and trusted cells that are gone, after their source predecessor
+    for scell in src.cells:
+        gid = scell.meta.get("grade_id")
+        if not gid or gid in present:
+            continue
+        new = _clean(_source_cell_json(src, scell.index))
+        if scell.meta.get("solution"):
+            new["source"] = ("*(missing from the submission)*" if new["cell_type"] == "markdown"
+                             else "# (missing from the submission)\n")
+        elif new["cell_type"] == "code":
+            new["source"] = strip_hidden(new["source"])
+        pos = len(cells)
+        prev_ids = [c.meta.get("grade_id") for c in src.cells[: scell.index]
+                    if c.meta.get("grade_id")]
+        for pid in reversed(prev_ids):
+            idx = next((i for i, c in enumerate(cells)
+                        if (c["metadata"].get("nbgrader") or {}).get("grade_id") == pid), None)
+            if idx is not None:
+                pos = idx + 1
+                break
+        else:
+            pos = 0 if prev_ids == [] else len(cells)
+        cells.insert(pos, new)
+        present.add(gid)
+    return cells

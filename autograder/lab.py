@@ -1,0 +1,189 @@
+"""``python -m autograder lab``: JupyterLab on the student or the instructor view of the course.
+
+``--role student`` (``make lab``)
+    releases the assignment through nbgrader (``course/release/tripos2006/``, solutions stubbed)
+    and opens JupyterLab on ``course/release/`` with the assignment folder open. The nbgrader
+    "Create Assignment", "Formgrader" and "Course List" plugins are disabled for this launch (and
+    the formgrader / course-list server extensions with them); the "Validate" button and the
+    "Assignments" panel stay.
+``--role instructor`` (``make instructor``)
+    opens JupyterLab on the nbgrader course root ``course/`` (``source/tripos2006/`` holds the
+    instructor's notebooks with solutions and hidden tests; ``nbgrader_config.py`` and the
+    gradebook sit beside it), with every nbgrader plugin enabled, the formgrader included.
+
+Extensions are switched per launch, not by editing anyone's installation: the launcher writes a
+throw-away Jupyter config directory (``labconfig/page_config.json`` with ``disabledExtensions``,
+the documented JupyterLab mechanism behind ``jupyter labextension disable``;
+``jupyter_server_config.json`` for server extensions; a student ``nbgrader_config.py``) and puts
+it first on ``JUPYTER_CONFIG_PATH`` for the server it starts. A user-level ``~/.jupyter`` still
+takes precedence, as Jupyter's config path always gives it.
+
+The server listens on 127.0.0.1 with a random token unless ``--ip`` / ``--token`` say otherwise;
+the URL to open is printed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import secrets
+import signal
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from .course import ASSIGNMENT, COURSE_ID, DEFAULT_COURSE_ROOT, nbgrader_env, prepare_course
+
+#: JupyterLab 4 plugin ids of nbgrader 0.9 (``@jupyter/nbgrader`` since 0.9.3).
+NBGRADER_PLUGINS = (
+    "@jupyter/nbgrader:formgrader",
+    "@jupyter/nbgrader:create-assignment",
+    "@jupyter/nbgrader:course-list",
+    "@jupyter/nbgrader:assignment-list",
+    "@jupyter/nbgrader:validate-assignment",
+)
+#: What a student must not have.
+STUDENT_DISABLED_PLUGINS = (
+    "@jupyter/nbgrader:formgrader",
+    "@jupyter/nbgrader:create-assignment",
+    "@jupyter/nbgrader:course-list",
+)
+STUDENT_DISABLED_SERVER_EXTENSIONS = (
+    "nbgrader.server_extensions.formgrader",
+    "nbgrader.server_extensions.course_list",
+)
+ROLES = ("student", "instructor")
+
+
+def page_config(role: str) -> dict:
+    """The ``labconfig/page_config.json`` of a launch: ``{"disabledExtensions": {id: bool}}``."""
+    if role not in ROLES:
+        raise ValueError(f"role must be one of {ROLES}, not {role!r}")
+    disabled = STUDENT_DISABLED_PLUGINS if role == "student" else ()
+    return {"disabledExtensions": {p: (p in disabled) for p in NBGRADER_PLUGINS}}
+
+
+def server_config(role: str) -> dict:
+    """The ``jupyter_server_config.json`` of a launch (server extensions on or off)."""
+    if role == "instructor":
+        return {}
+    return {"ServerApp": {"jpserver_extensions": {e: False for e in STUDENT_DISABLED_SERVER_EXTENSIONS}}}
+
+
+def write_launch_config(config_dir: Path, role: str, course_root: Path) -> Path:
+    """Fill ``config_dir`` with the per-launch Jupyter configuration for ``role``."""
+    config_dir = Path(config_dir)
+    (config_dir / "labconfig").mkdir(parents=True, exist_ok=True)
+    (config_dir / "labconfig" / "page_config.json").write_text(json.dumps(page_config(role), indent=1))
+    (config_dir / "jupyter_server_config.json").write_text(json.dumps(server_config(role), indent=1))
+    if role == "student":
+        # the Assignments panel reads nbgrader config from the Jupyter config path: point it at
+        # the course's local exchange instead of /srv/nbgrader/exchange
+        (config_dir / "nbgrader_config.py").write_text(
+            "c = get_config()  # noqa: F821\n"
+            f"c.CourseDirectory.course_id = {COURSE_ID!r}\n"
+            f"c.Exchange.root = {str(Path(course_root).resolve() / 'exchange')!r}\n"
+        )
+    return config_dir
+
+
+def lab_command(
+    role: str, root_dir: Path, port: int, ip: str, token: str, open_browser: bool, default_url: str
+) -> list[str]:
+    """The ``python -m jupyterlab ...`` command line of a launch."""
+    return [
+        sys.executable, "-m", "jupyterlab",
+        f"--ServerApp.root_dir={root_dir}",
+        f"--ServerApp.ip={ip}",
+        f"--ServerApp.port={port}",
+        "--ServerApp.port_retries=0",
+        f"--IdentityProvider.token={token}",
+        f"--ServerApp.open_browser={open_browser}",
+        f"--LabApp.default_url={default_url}",
+        # Jupyter refuses to start as root without this (containers, CI); say it explicitly
+        *(["--ServerApp.allow_root=True"] if hasattr(os, "geteuid") and os.geteuid() == 0 else []),
+    ]
+
+
+def launch(
+    role: str,
+    course_root: Path = DEFAULT_COURSE_ROOT,
+    port: int = 8888,
+    ip: str = "127.0.0.1",
+    token: str | None = None,
+    open_browser: bool = True,
+    config_dir: Path | None = None,
+    stdout=None,
+    stderr=None,
+) -> tuple[subprocess.Popen, str]:
+    """Prepare the course, start JupyterLab for ``role`` and return ``(process, url)``.
+
+    ``config_dir`` is the per-launch Jupyter config directory (the caller owns it).
+    """
+    if role not in ROLES:
+        raise ValueError(f"role must be one of {ROLES}, not {role!r}")
+    if config_dir is None:
+        raise ValueError("launch() needs a config_dir for the per-launch Jupyter config")
+    course = prepare_course(Path(course_root))
+    if role == "student":
+        root_dir, default_url = course.release_dir.parent, f"/lab/tree/{ASSIGNMENT}"
+    else:
+        root_dir, default_url = course.root, "/lab"
+    token = secrets.token_hex(24) if token is None else token
+    write_launch_config(config_dir, role, course.root)
+    env = nbgrader_env()
+    env["JUPYTER_CONFIG_PATH"] = os.pathsep.join(
+        [str(config_dir), *[p for p in env.get("JUPYTER_CONFIG_PATH", "").split(os.pathsep) if p]]
+    )
+    cmd = lab_command(role, root_dir, port, ip, token, open_browser, default_url)
+    proc = subprocess.Popen(cmd, cwd=root_dir, env=env, stdout=stdout, stderr=stderr)
+    host = "localhost" if ip in ("127.0.0.1", "localhost", "") else ip
+    url = f"http://{host}:{port}{default_url}" + (f"?token={token}" if token else "")
+    return proc, url
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.description = "Open JupyterLab on the student or the instructor view of the course."
+    parser.add_argument("--role", choices=ROLES, default="student",
+                        help="student: released notebooks; instructor: the nbgrader course root")
+    parser.add_argument("--port", type=int, default=8888)
+    parser.add_argument("--ip", default="127.0.0.1",
+                        help="interface to listen on (default: localhost only)")
+    parser.add_argument("--token", default=None,
+                        help="access token (default: a random one; '' disables it, only do that "
+                             "behind another authentication)")
+    parser.add_argument("--no-browser", action="store_true", help="do not open a browser")
+    parser.add_argument("--course-root", type=Path, default=DEFAULT_COURSE_ROOT,
+                        help=f"nbgrader course root (default: {DEFAULT_COURSE_ROOT})")
+
+
+def main(args: argparse.Namespace) -> int:
+    with tempfile.TemporaryDirectory(prefix=f"4f9-lab-{args.role}-") as tmp:
+        try:
+            proc, url = launch(
+                args.role, args.course_root, port=args.port, ip=args.ip, token=args.token,
+                open_browser=not args.no_browser, config_dir=Path(tmp),
+            )
+        except (FileNotFoundError, RuntimeError) as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 1
+        view = ("student view: the released notebooks (solutions stubbed)" if args.role == "student"
+                else "instructor view: the nbgrader course root with the formgrader")
+        print(f"\n4F9 {view}\n  {url}\n", flush=True)
+        # one Ctrl-C (or a SIGTERM to this launcher) stops JupyterLab without its y/n prompt
+        signal.signal(signal.SIGTERM, _interrupt)
+        try:
+            return proc.wait()
+        except KeyboardInterrupt:
+            proc.terminate()
+            try:
+                return proc.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                return proc.wait()

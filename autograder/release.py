@@ -1,0 +1,120 @@
+"""``python -m autograder release``: the student versions of ``tripos2006``.
+
+The student notebooks come out of nbgrader's own ``generate_assignment`` (run in an nbgrader
+course root, ``course/`` at the repository root unless ``--course-root`` says otherwise, whose
+gradebook then holds the assignment for grading). They are copied to ``--out/tripos2006/`` only
+after a leak check: no solution or hidden-test delimiters, no import of the in-kernel checker
+(``autograder.incell``), no model answer of a manually graded cell, no outputs.
+
+    python -m autograder release --out dist/            # -> dist/tripos2006/q1_imaging.ipynb ...
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import sys
+from pathlib import Path
+
+import nbformat
+
+from .course import (
+    ASSIGNMENT,
+    DEFAULT_COURSE_ROOT,
+    TEXT_STUB,
+    CourseDir,
+    prepare_course,
+    source_notebooks,
+)
+
+#: Text that must never reach a student (checked in every cell of every release notebook).
+FORBIDDEN = (
+    "BEGIN SOLUTION",
+    "END SOLUTION",
+    "BEGIN HIDDEN TESTS",
+    "END HIDDEN TESTS",
+    "autograder.incell",
+)
+
+
+class ReleaseLeak(RuntimeError):
+    """A release notebook contains something a student must not see."""
+
+
+def leaks(notebook: Path) -> list[str]:
+    """Every problem that makes ``notebook`` unfit to give to a student (empty when fine)."""
+    nb = nbformat.read(str(notebook), as_version=4)
+    problems = []
+    for i, cell in enumerate(nb.cells):
+        meta = cell.get("metadata", {}).get("nbgrader", {})
+        where = f"{notebook.name} cell {i}" + (f" ({meta['grade_id']})" if meta.get("grade_id") else "")
+        for marker in FORBIDDEN:
+            if marker.lower() in cell.source.lower():
+                problems.append(f"{where}: contains {marker!r}")
+        if cell.cell_type == "markdown" and meta.get("solution") and meta.get("grade"):
+            if cell.source.strip() != TEXT_STUB:
+                problems.append(f"{where}: a manually graded answer cell is not the stub {TEXT_STUB!r}")
+        if cell.cell_type == "code" and (cell.get("outputs") or cell.get("execution_count")):
+            problems.append(f"{where}: carries outputs")
+    return problems
+
+
+def check_release(notebooks: list[Path]) -> None:
+    """Raise :class:`ReleaseLeak` listing every leak in ``notebooks``."""
+    problems = [p for nb in notebooks for p in leaks(Path(nb))]
+    if problems:
+        raise ReleaseLeak(
+            "the student versions would leak instructor material:\n  " + "\n  ".join(problems)
+        )
+
+
+def release(out: Path | None = None, course_root: Path | None = None) -> list[Path]:
+    """Generate the student versions and copy them to ``out/tripos2006/``; return their paths.
+
+    With ``out`` ``None`` the notebooks stay in ``<course_root>/release/tripos2006/``.
+    """
+    course: CourseDir = prepare_course(Path(course_root or DEFAULT_COURSE_ROOT))
+    released = course.release_notebooks()
+    check_release(released)
+    if out is None:
+        return released
+    dest = Path(out).resolve() / ASSIGNMENT
+    if dest == course.release_dir.resolve():
+        return released
+    dest.mkdir(parents=True, exist_ok=True)
+    written = []
+    for nb in released:
+        target = dest / nb.name
+        shutil.copyfile(nb, target)
+        written.append(target)
+    return written
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.description = "Write the student versions of the assignment through nbgrader."
+    parser.add_argument(
+        "--out", type=Path, default=None,
+        help=f"write DIR/{ASSIGNMENT}/*.ipynb (default: leave them in COURSE_ROOT/release/)",
+    )
+    parser.add_argument(
+        "--course-root", type=Path, default=DEFAULT_COURSE_ROOT,
+        help="the nbgrader course root holding source/, release/ and the gradebook "
+             f"(default: {DEFAULT_COURSE_ROOT})",
+    )
+
+
+def main(args: argparse.Namespace) -> int:
+    if not source_notebooks():
+        print("error: no notebooks/q*.ipynb to release", file=sys.stderr)
+        return 1
+    try:
+        written = release(args.out, args.course_root)
+    except ReleaseLeak as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except RuntimeError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    for path in written:
+        print(path)
+    return 0

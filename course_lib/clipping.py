@@ -1,0 +1,704 @@
+"""Homogeneous clipping, triangle decomposition and scanline spans (exam question 6).
+
+The rendering pipeline of the course carries every vertex in *homogeneous 3D screen coordinates*
+``[X, Y, Z, w]``: the perspective matrix has already been applied, but the divide by ``w`` has
+not. The view volume is then the box
+
+    -w <= X <= w,    -w <= Y <= w,    0 <= Z <= w                                (Q6(a))
+
+which, after the divide ``(x_s, y_s, z_s) = (X, Y, Z) / w``, is the cube-like box
+``[-1, 1] x [-1, 1] x [0, 1]`` of non-homogeneous screen space. Clipping against it is done
+*before* the divide (Q6(b)(i)): the six inequalities do not depend on the camera, they are cheap
+enough for hardware, and polygons that are thrown away never pay for a division.
+
+Contents
+--------
+Contract functions (``shared/EXERCISES.md``, notebook ``q6_clipping``):
+    :func:`inside_view_volume`, :func:`to_screen`, :func:`clip_polygon`, :func:`screen_area`,
+    :func:`fan_triangulate`, :func:`scanline_span`.
+Further tools used by the figures, the explorer and the "going further" section:
+    :func:`clip_against_plane`, :func:`clip_steps` (the polygon after each of the six planes),
+    :func:`polygon_area`, :func:`is_convex`, :func:`ear_clip` (triangulation of simple, possibly
+    non-convex polygons), :func:`polygon_spans` (several spans on one scanline),
+    :func:`rasterize_triangle` and :func:`triangle_spans` (a scanline rasteriser with the
+    top-left fill rule).
+
+Points with ``w <= 0``
+----------------------
+The two X inequalities together say ``w >= |X|``, so every point of the view volume has
+``w >= 0`` and the only one with ``w = 0`` is the zero vector, which is not a point at all. A
+vertex with ``w < 0`` (behind the centre of projection, as a perspective matrix produces it) is
+therefore always *outside*, and the homogeneous clipper cuts it away before anything is divided.
+Dividing first would be wrong: ``(X, Y, Z) / w`` with ``w < 0`` lands in front of the viewer,
+mirrored, and an edge from such a vertex would wrap around through infinity. Note that
+``[X, Y, Z, w]`` and ``-[X, Y, Z, w]`` name the same projective point; the clipper (like the
+hardware it models) treats the copy with negative ``w`` as behind the eye, which is the
+convention of a perspective matrix that makes ``w`` the (positive) depth in front of the eye.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._validate import as_float_array, as_int, as_points, as_scalar, as_vectors
+
+__all__ = [
+    "PLANES",
+    "PLANE_NAMES",
+    "clip_against_plane",
+    "clip_polygon",
+    "clip_steps",
+    "ear_clip",
+    "fan_triangulate",
+    "inside_view_volume",
+    "is_convex",
+    "polygon_area",
+    "polygon_spans",
+    "rasterize_triangle",
+    "scanline_span",
+    "screen_area",
+    "to_screen",
+    "triangle_spans",
+]
+
+#: The six clipping planes as linear forms ``n . [X, Y, Z, w] >= 0`` (inside), in the order the
+#: clipper applies them: left, right, bottom, top, near, far.
+PLANES = np.array(
+    [
+        [1.0, 0.0, 0.0, 1.0],   # X >= -w   (left,   x_s >= -1)
+        [-1.0, 0.0, 0.0, 1.0],  # X <=  w   (right,  x_s <=  1)
+        [0.0, 1.0, 0.0, 1.0],   # Y >= -w   (bottom, y_s >= -1)
+        [0.0, -1.0, 0.0, 1.0],  # Y <=  w   (top,    y_s <=  1)
+        [0.0, 0.0, 1.0, 0.0],   # Z >=  0   (near,   z_s >=  0)
+        [0.0, 0.0, -1.0, 1.0],  # Z <=  w   (far,    z_s <=  1)
+    ]
+)
+PLANES.setflags(write=False)
+
+#: Human-readable names of :data:`PLANES`, in the same order.
+PLANE_NAMES = (
+    "left (X >= -w)",
+    "right (X <= w)",
+    "bottom (Y >= -w)",
+    "top (Y <= w)",
+    "near (Z >= 0)",
+    "far (Z <= w)",
+)
+
+#: Relative tolerance under which a vertex counts as lying *on* a clipping plane.
+_ON_PLANE_RTOL = 1e-12
+
+
+# ------------------------------------------------------------------------------------------------
+# contract functions
+
+
+def inside_view_volume(P) -> np.ndarray:
+    """Whether each homogeneous vertex lies inside the view volume (Q6(b)(i)).
+
+    Parameters
+    ----------
+    P : array_like, shape (..., 4)
+        Homogeneous 3D screen coordinates ``[X, Y, Z, w]``; one vertex ``(4,)`` or any batch.
+
+    Returns
+    -------
+    inside : ndarray of bool, shape (...)
+        True where ``-w <= X <= w``, ``-w <= Y <= w`` and ``0 <= Z <= w`` (boundary included).
+
+    Raises
+    ------
+    ValueError
+        If the last axis of ``P`` is not 4, or ``P`` holds NaN or inf.
+
+    Notes
+    -----
+    Q6(a) gives the view volume in homogeneous coordinates; Q6(b)(i) asks which of the exam's
+    vertices lie inside it. The test needs six comparisons and no division, and the same six
+    inequalities serve every camera, which is why hardware performs it before the divide by
+    ``w``. The inequalities imply ``w >= 0``; the zero vector ``[0, 0, 0, 0]`` satisfies them
+    but is not a point, so it is reported as outside (``w > 0`` is required as well).
+
+    Examples
+    --------
+    The third vertex of the exam's triangle A has ``z_s = 1.5`` (here ``[0, 1, 3, 2]``):
+
+    >>> inside_view_volume([[0, 0, 1, 2], [0, 0.5, 0.5, 1], [0, 1, 3, 2]])
+    array([ True,  True, False])
+    """
+    P = as_vectors(P, 4, "P")
+    X, Y, Z, w = np.moveaxis(P, -1, 0)
+    return (w > 0) & (-w <= X) & (X <= w) & (-w <= Y) & (Y <= w) & (0 <= Z) & (Z <= w)
+
+
+def to_screen(P) -> np.ndarray:
+    """Non-homogeneous 3D screen coordinates ``(X, Y, Z) / w`` (Q6(b)(ii)).
+
+    Parameters
+    ----------
+    P : array_like, shape (..., 4)
+        Homogeneous 3D screen coordinates ``[X, Y, Z, w]``.
+
+    Returns
+    -------
+    screen : ndarray, shape (..., 3)
+        ``(x_s, y_s, z_s)``; an empty ``(0, 4)`` input gives an empty ``(0, 3)`` output.
+
+    Raises
+    ------
+    ValueError
+        If the last axis is not 4, or some vertex has ``w = 0`` (a point at infinity has no
+        screen position).
+
+    Notes
+    -----
+    A vertex with ``w < 0`` is divided like any other, but the result is meaningless for
+    display: it is the mirror image of a point behind the eye. Clip first
+    (:func:`clip_polygon` removes every ``w < 0`` vertex), then divide.
+
+    Examples
+    --------
+    >>> to_screen([0.0, 1.0, 3.0, 2.0])
+    array([0. , 0.5, 1.5])
+    """
+    P = as_vectors(P, 4, "P")
+    w = P[..., 3:]
+    if np.any(w == 0):
+        raise ValueError("P has a vertex with w = 0 (a point at infinity), which cannot be "
+                         "divided by w")
+    return P[..., :3] / w
+
+
+def clip_polygon(P) -> np.ndarray:
+    """Sutherland-Hodgman clipping of a polygon against the view volume (Q6(b)(iii)).
+
+    Parameters
+    ----------
+    P : array_like, shape (n, 4), n >= 3
+        The polygon's vertices in homogeneous 3D screen coordinates, in order.
+
+    Returns
+    -------
+    clipped : ndarray, shape (m, 4)
+        The part of the polygon inside the view volume, still homogeneous, in the same
+        orientation (vertex order) as ``P``; a vertex of ``P`` that survives is returned
+        unchanged. An empty ``(0, 4)`` array when nothing with positive extent is left (fewer
+        than three vertices).
+
+    Raises
+    ------
+    ValueError
+        If ``P`` is not ``(n, 4)`` with ``n >= 3``, holds NaN/inf, or has a zero vertex.
+
+    Notes
+    -----
+    The polygon is clipped against each plane ``d(P) = n . P >= 0`` of :data:`PLANES` in turn.
+    For each edge ``S -> E`` of the current polygon, ``S`` is kept when ``d(S) >= 0``, and when
+    the edge crosses the plane strictly (``d(S) d(E) < 0``) the crossing point
+
+        I = S + t (E - S),    t = d(S) / (d(S) - d(E))
+
+    is inserted after it (computed as ``(|d(E)| S + |d(S)| E) / (|d(S)| + |d(E)|)``, the same
+    point with better rounding). Because ``d`` is linear in homogeneous coordinates, ``I`` lies exactly
+    on the plane; the crossing point is the same projective point one would find in screen
+    space, only its parameter ``t`` differs. A vertex lying on a plane (within a relative
+    tolerance of 1e-12) counts as inside and creates no extra vertex, so clipping an
+    already-clipped polygon changes nothing. Points with ``w < 0`` fail ``X >= -w`` or
+    ``X <= w`` and are removed without ever being divided (see the module notes). Clipping a
+    convex polygon gives one convex polygon; a triangle may come back with up to nine vertices,
+    which is why triangle decomposition comes after clipping (Q6(c)).
+
+    Examples
+    --------
+    The exam's triangle A (``z_s`` of its third vertex is 1.5) loses a corner to the far plane:
+
+    >>> A = [[0, 0, 1, 2], [0, 0.5, 0.5, 1], [0, 1, 3, 2]]
+    >>> to_screen(clip_polygon(A))
+    array([[0.  , 0.  , 0.5 ],
+           [0.  , 0.5 , 0.5 ],
+           [0.  , 0.5 , 1.  ],
+           [0.  , 0.25, 1.  ]])
+    """
+    P = _polygon4(P)
+    for plane in PLANES:
+        P = clip_against_plane(P, plane)
+        if len(P) < 3:
+            return np.zeros((0, 4))
+    return P
+
+
+def screen_area(P_screen) -> float:
+    """Signed area of a polygon's projection on the ``(x_s, y_s)`` plane (Q6(b)(ii)).
+
+    Parameters
+    ----------
+    P_screen : array_like, shape (n, 3) or (n, 2)
+        Vertices in (non-homogeneous) screen coordinates; only ``x_s`` and ``y_s`` are used.
+        ``n`` may be 0, 1 or 2 (area 0), so an empty clipped polygon is accepted.
+
+    Returns
+    -------
+    area : float
+        The shoelace sum ``1/2 sum_i (x_i y_{i+1} - x_{i+1} y_i)``: positive when the vertices
+        run anticlockwise with ``x_s`` to the right and ``y_s`` up, negative when clockwise.
+
+    Raises
+    ------
+    ValueError
+        If ``P_screen`` is not a 2-D array with 2 or 3 columns, or holds NaN/inf.
+
+    Notes
+    -----
+    Q6(b)(ii): the exam's triangles A and B both have ``x_s = 0`` at every vertex, so they are
+    seen edge-on and cover no screen area at all, however large they are in the world.
+
+    Examples
+    --------
+    >>> screen_area([[0, 0, 0.5], [0, 0.5, 0.5], [0, 0.5, 1.5]])
+    0.0
+    >>> screen_area([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    0.5
+    """
+    P = as_float_array(P_screen, "P_screen")
+    if P.ndim != 2 or P.shape[1] not in (2, 3):
+        raise ValueError(f"P_screen must have shape (n, 3) or (n, 2), got shape {P.shape}")
+    if len(P) < 3:
+        return 0.0
+    x, y = P[:, 0], P[:, 1]
+    # Shift to the centroid first: the same sum, with far less cancellation.
+    x = x - x.mean()
+    y = y - y.mean()
+    return float(0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def fan_triangulate(m) -> np.ndarray:
+    """Fan triangulation of a convex m-gon: triangles ``(0, i, i + 1)`` (Q6(c)).
+
+    Parameters
+    ----------
+    m : int
+        Number of vertices, at least 3.
+
+    Returns
+    -------
+    triangles : ndarray of int, shape (m - 2, 3)
+        Vertex indices; every triangle keeps the polygon's orientation.
+
+    Raises
+    ------
+    ValueError
+        If ``m`` is not an integer >= 3.
+
+    Notes
+    -----
+    Q6(c): a clipped convex polygon is split into triangles right after clipping. Fanning from
+    vertex 0 is correct for any convex polygon because the segment from vertex 0 to every other
+    vertex lies inside it. For a non-convex polygon use :func:`ear_clip`.
+
+    Examples
+    --------
+    The clipped triangle A has four vertices, hence two triangles:
+
+    >>> fan_triangulate(4)
+    array([[0, 1, 2],
+           [0, 2, 3]])
+    """
+    m = as_int(m, "m", minimum=3)
+    i = np.arange(1, m - 1)
+    return np.stack([np.zeros_like(i), i, i + 1], axis=1)
+
+
+def scanline_span(tri_xy, y):
+    """Where the horizontal line at height ``y`` crosses a triangle (Q6(c)).
+
+    Parameters
+    ----------
+    tri_xy : array_like, shape (3, 2)
+        The triangle's screen vertices ``(x, y)``.
+    y : float
+        Height of the scanline.
+
+    Returns
+    -------
+    span : tuple of two floats, or None
+        ``(x_left, x_right)``, ``x_left <= x_right``, the closed interval the line shares with
+        the (closed) triangle; ``None`` when the line misses it. A line through a single vertex
+        gives ``(x, x)``; a line along a horizontal edge gives that edge.
+
+    Raises
+    ------
+    ValueError
+        If ``tri_xy`` is not ``(3, 2)`` or ``y`` is not a single finite number.
+
+    Notes
+    -----
+    Q6(c): a triangle is convex, so a scanline meets it in one interval, a *single span*; the
+    rasteriser fills it from ``x_left`` to ``x_right`` with no sorting. Each edge ``a -> b``
+    that the line meets (``min(a_y, b_y) <= y <= max(a_y, b_y)``) contributes
+    ``x = a_x + (y - a_y)(b_x - a_x) / (b_y - a_y)`` (both ends if the edge is horizontal);
+    the span runs from the smallest to the largest. A non-convex polygon can have several
+    spans on one line (:func:`polygon_spans`).
+
+    Examples
+    --------
+    >>> scanline_span([[0, 0], [4, 0], [0, 2]], 1.0)
+    (0.0, 2.0)
+    >>> scanline_span([[0, 0], [4, 0], [0, 2]], 3.0) is None
+    True
+    """
+    tri = as_points(tri_xy, 2, "tri_xy")
+    if tri.shape[0] != 3:
+        raise ValueError(f"tri_xy must have shape (3, 2), got shape {tri.shape}")
+    y = as_scalar(y, "y")
+    a, b = tri, np.roll(tri, -1, axis=0)
+    lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
+    hit = (lo <= y) & (y <= hi)
+    if not np.any(hit):
+        return None
+    a, b = a[hit], b[hit]
+    dy = b[:, 1] - a[:, 1]
+    flat = dy == 0
+    xs = [a[flat, 0], b[flat, 0]]
+    s = ~flat
+    xs.append(a[s, 0] + (y - a[s, 1]) * (b[s, 0] - a[s, 0]) / dy[s])
+    xs = np.concatenate(xs)
+    return float(xs.min()), float(xs.max())
+
+
+# ------------------------------------------------------------------------------------------------
+# clipping, one plane at a time
+
+
+def clip_against_plane(P, plane) -> np.ndarray:
+    """One Sutherland-Hodgman pass: the part of polygon ``P`` where ``plane . P >= 0``.
+
+    Parameters
+    ----------
+    P : array_like, shape (n, 4)
+        Homogeneous polygon (``n`` may be 0; fewer than 3 vertices are passed through the same
+        rule, which is what a step-by-step display needs).
+    plane : array_like, shape (4,) or int
+        The linear form ``n`` of the half-space ``n . P >= 0``, or an index into :data:`PLANES`.
+
+    Returns
+    -------
+    clipped : ndarray, shape (m, 4)
+        Surviving vertices and inserted crossings, in the order of ``P``.
+
+    Notes
+    -----
+    See :func:`clip_polygon` for the rule. The pass is vectorised: each vertex ``S_i``
+    contributes up to two outputs, itself (if inside) and the crossing on edge ``S_i S_{i+1}``
+    (if the edge crosses), which are interleaved and masked.
+    """
+    P = as_float_array(P, "P")
+    if P.ndim != 2 or P.shape[1] != 4:
+        raise ValueError(f"P must have shape (n, 4), got shape {P.shape}")
+    if isinstance(plane, (int, np.integer)):
+        plane = PLANES[as_int(plane, "plane", minimum=0)]
+    plane = as_vectors(plane, 4, "plane")
+    if len(P) == 0:
+        return P.copy()
+    d = P @ plane
+    tol = _ON_PLANE_RTOL * np.max(np.abs(P), axis=1) * np.max(np.abs(plane))
+    d = np.where(np.abs(d) <= tol, 0.0, d)
+    E = np.roll(P, -1, axis=0)
+    dE = np.roll(d, -1)
+    keep = d >= 0
+    cross = d * dE < 0
+    # I = (|d_E| S + |d_S| E) / (|d_S| + |d_E|): positive weights, so every coordinate is
+    # accurate relative to the vertices' size and d(I) = 0 up to rounding.
+    aS, aE = np.abs(d)[:, None], np.abs(dE)[:, None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        crossing = (aE * P + aS * E) / np.where(cross[:, None], aS + aE, 1.0)
+    # An edge from S to a negative multiple of S passes through the 4-D origin, which is no
+    # point: such a crossing is dropped (the edge is degenerate projectively).
+    size = np.maximum(np.max(np.abs(P), axis=1), np.max(np.abs(E), axis=1))
+    cross &= np.max(np.abs(crossing), axis=1) > _ON_PLANE_RTOL * size
+    out = np.stack([P, crossing], axis=1).reshape(-1, 4)
+    mask = np.stack([keep, cross], axis=1).reshape(-1)
+    return out[mask]
+
+
+def clip_steps(P) -> list[np.ndarray]:
+    """The polygon before clipping and after each of the six planes, in order (Q6(b)(iii)).
+
+    Parameters
+    ----------
+    P : array_like, shape (n, 4), n >= 3
+        Homogeneous polygon.
+
+    Returns
+    -------
+    steps : list of 7 ndarrays of shape (m_k, 4)
+        ``steps[0]`` is ``P``; ``steps[k]`` is the polygon after planes ``1 .. k`` of
+        :data:`PLANES` (left, right, bottom, top, near, far). Unlike :func:`clip_polygon`, a
+        polygon reduced to one or two vertices on the way is kept as it is, so every step can be
+        drawn; ``steps[6]`` has fewer than 3 vertices exactly when :func:`clip_polygon` returns
+        an empty array.
+    """
+    P = _polygon4(P)
+    steps = [P]
+    for plane in PLANES:
+        steps.append(clip_against_plane(steps[-1], plane))
+    return steps
+
+
+def _polygon4(P) -> np.ndarray:
+    P = as_float_array(P, "P")
+    if P.ndim != 2 or P.shape[1] != 4:
+        raise ValueError(f"P must have shape (n, 4), got shape {P.shape}")
+    if P.shape[0] < 3:
+        raise ValueError(f"P needs at least 3 vertices to be a polygon, got {P.shape[0]}")
+    if np.any(np.all(P == 0, axis=1)):
+        raise ValueError("P has a zero vertex [0, 0, 0, 0], which is not a homogeneous point")
+    return P
+
+
+# ------------------------------------------------------------------------------------------------
+# 2-D polygons: area, convexity, ear clipping, spans
+
+
+def _polygon2(poly_xy, name="poly_xy", min_count=3) -> np.ndarray:
+    return as_points(poly_xy, 2, name, min_count=min_count)
+
+
+def polygon_area(poly_xy) -> float:
+    """Signed (shoelace) area of a 2-D polygon: positive when anticlockwise.
+
+    Parameters
+    ----------
+    poly_xy : array_like, shape (n, 2), n >= 3
+
+    Returns
+    -------
+    float
+    """
+    return screen_area(_polygon2(poly_xy))
+
+
+def _cross(o, a, b):
+    """z-component of ``(a - o) x (b - o)``, broadcasting over leading axes."""
+    return (a[..., 0] - o[..., 0]) * (b[..., 1] - o[..., 1]) - \
+        (a[..., 1] - o[..., 1]) * (b[..., 0] - o[..., 0])
+
+
+def is_convex(poly_xy) -> bool:
+    """True when a 2-D polygon is convex (all turns the same way, collinear turns allowed).
+
+    Parameters
+    ----------
+    poly_xy : array_like, shape (n, 2), n >= 3
+
+    Returns
+    -------
+    bool
+
+    Notes
+    -----
+    Checks the sign of every turn and that the boundary winds around exactly once (the turning
+    angles add up to +-2 pi), which rules out self-intersecting "stars" whose turns all agree.
+    """
+    p = _polygon2(poly_xy)
+    prev, nxt = np.roll(p, 1, axis=0), np.roll(p, -1, axis=0)
+    turn = _cross(prev, p, nxt)
+    scale = np.max(np.abs(p - p.mean(axis=0))) ** 2
+    turn = np.where(np.abs(turn) <= 1e-12 * scale, 0.0, turn)
+    if np.any(turn > 0) and np.any(turn < 0):
+        return False
+    e = nxt - p
+    ang = np.arctan2(e[:, 1], e[:, 0])
+    dtheta = np.angle(np.exp(1j * (np.roll(ang, -1) - ang)))
+    return bool(abs(abs(dtheta.sum()) - 2 * np.pi) < 1e-6)
+
+
+def ear_clip(poly_xy) -> np.ndarray:
+    """Triangulate a simple (possibly non-convex) 2-D polygon by ear clipping (Q6(c), further).
+
+    Parameters
+    ----------
+    poly_xy : array_like, shape (n, 2), n >= 3
+        Vertices of a simple polygon (no self-intersections, no holes), either orientation.
+
+    Returns
+    -------
+    triangles : ndarray of int, shape (n - 2, 3)
+        Indices into ``poly_xy``; each triangle has the polygon's orientation and together they
+        cover it exactly once, so their areas sum to the polygon's area.
+
+    Raises
+    ------
+    ValueError
+        If ``poly_xy`` is not ``(n, 2)`` with ``n >= 3``, or has zero area.
+
+    Notes
+    -----
+    Every simple polygon with more than three vertices has at least two *ears* (Meisters' two
+    ears theorem): convex vertices whose triangle with their two neighbours contains no other
+    vertex. Cutting an ear off leaves a simple polygon with one vertex fewer, so ``n - 2``
+    cuts triangulate it, in ``O(n^2)`` tests at most per cut here (each vectorised over the
+    remaining vertices). A vertex whose neighbours are collinear with it is cut as a
+    zero-area triangle when no proper ear is left, which keeps the count at ``n - 2``.
+    """
+    p = _polygon2(poly_xy)
+    n = len(p)
+    area = polygon_area(p)
+    scale = np.max(np.abs(p - p.mean(axis=0))) ** 2
+    if abs(area) <= 1e-14 * max(scale, np.finfo(float).tiny):
+        raise ValueError("poly_xy has zero area, so it cannot be triangulated")
+    sign = 1.0 if area > 0 else -1.0
+    tol = 1e-12 * scale
+    idx = list(range(n))
+    tris = []
+    while len(idx) > 3:
+        m = len(idx)
+        q = p[idx]
+        prev, nxt = np.roll(q, 1, axis=0), np.roll(q, -1, axis=0)
+        turn = sign * _cross(prev, q, nxt)
+        cut = None
+        for k in np.flatnonzero(turn > tol):
+            a, b, c = q[k - 1], q[k], q[(k + 1) % m]
+            others = np.delete(np.arange(m), [(k - 1) % m, k, (k + 1) % m])
+            r = q[others]
+            # Any other vertex inside or on the candidate triangle blocks the ear (vertices that
+            # coincide with a, b or c are ignored: they touch the ear only at a corner).
+            dup = (np.all(r == a, axis=1) | np.all(r == b, axis=1) | np.all(r == c, axis=1))
+            r = r[~dup]
+            ab = sign * _cross(a, b, r)
+            bc = sign * _cross(b, c, r)
+            ca = sign * _cross(c, a, r)
+            if not np.any((ab >= -tol) & (bc >= -tol) & (ca >= -tol)):
+                cut = k
+                break
+        if cut is None:
+            # Only (numerically) collinear or reflex vertices remain: drop the flattest one.
+            cut = int(np.argmin(np.abs(turn)))
+        tris.append((idx[cut - 1], idx[cut], idx[(cut + 1) % m]))
+        del idx[cut]
+    tris.append(tuple(idx))
+    return np.array(tris, dtype=np.intp)
+
+
+def polygon_spans(poly_xy, y) -> list[tuple[float, float]]:
+    """All spans of a 2-D polygon on the scanline at height ``y`` (even-odd rule; Q6(c)).
+
+    Parameters
+    ----------
+    poly_xy : array_like, shape (n, 2), n >= 3
+    y : float
+
+    Returns
+    -------
+    spans : list of (x_left, x_right)
+        Disjoint intervals sorted by ``x``; empty when the line misses the polygon.
+
+    Notes
+    -----
+    The crossings of the line with the edges are sorted and paired: inside runs from the 1st
+    crossing to the 2nd, the 3rd to the 4th, ... Each edge is treated as half-open in ``y``
+    (its lower end counts, its upper end does not) so a vertex is never counted twice and
+    horizontal edges add nothing. A convex polygon gives at most one span; a non-convex one
+    can give several, which a rasteriser has to sort: the reason Q6(c) splits polygons into
+    triangles.
+    """
+    p = _polygon2(poly_xy)
+    y = as_scalar(y, "y")
+    a, b = p, np.roll(p, -1, axis=0)
+    lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
+    hit = (lo <= y) & (y < hi)
+    a, b = a[hit], b[hit]
+    xs = np.sort(a[:, 0] + (y - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1]))
+    return [(float(xs[i]), float(xs[i + 1])) for i in range(0, len(xs) - 1, 2)
+            if xs[i + 1] > xs[i]]
+
+
+# ------------------------------------------------------------------------------------------------
+# a small scanline rasteriser
+
+
+def rasterize_triangle(tri_xy, width, height) -> np.ndarray:
+    """Pixels covered by a triangle, with the top-left fill rule (Q6(c), further).
+
+    Parameters
+    ----------
+    tri_xy : array_like, shape (3, 2)
+        Vertices in pixel coordinates: ``x`` to the right, ``y`` *down* (row index), pixel
+        ``(row, col)`` having its centre at ``(col + 0.5, row + 0.5)``.
+    width, height : int
+        Size of the raster, at least 1.
+
+    Returns
+    -------
+    mask : ndarray of bool, shape (height, width)
+        True for the pixels whose centre the triangle covers.
+
+    Notes
+    -----
+    A pixel centre ``p`` is inside when the three edge functions
+    ``E_ab(p) = (b - a) x (p - a)`` (vertices ordered to give a positive area) are all
+    positive. A centre exactly on an edge is given to the triangle only when the edge is a
+    *top* edge (horizontal, with the triangle below it) or a *left* edge (going up the screen
+    in this ordering), as in Direct3D and OpenGL. With that rule two triangles that share an
+    edge never both draw, nor both miss, a pixel centre on it: every pixel of a mesh is drawn
+    exactly once. Degenerate (zero-area) triangles cover nothing. Each row of the result is a
+    single run of pixels (:func:`triangle_spans`), because a triangle is convex.
+    """
+    tri = as_points(tri_xy, 2, "tri_xy")
+    if tri.shape[0] != 3:
+        raise ValueError(f"tri_xy must have shape (3, 2), got shape {tri.shape}")
+    width = as_int(width, "width", minimum=1)
+    height = as_int(height, "height", minimum=1)
+    mask = np.zeros((height, width), dtype=bool)
+    area2 = _cross(tri[0], tri[1], tri[2])
+    if area2 == 0:
+        return mask
+    if area2 < 0:
+        tri = tri[[0, 2, 1]]
+    # Only the bounding box needs testing.
+    c0 = max(int(np.floor(tri[:, 0].min() - 0.5)), 0)
+    c1 = min(int(np.ceil(tri[:, 0].max() - 0.5)), width - 1)
+    r0 = max(int(np.floor(tri[:, 1].min() - 0.5)), 0)
+    r1 = min(int(np.ceil(tri[:, 1].max() - 0.5)), height - 1)
+    if c0 > c1 or r0 > r1:
+        return mask
+    px = np.arange(c0, c1 + 1) + 0.5
+    py = np.arange(r0, r1 + 1)[:, None] + 0.5
+    inside = np.ones((r1 - r0 + 1, c1 - c0 + 1), dtype=bool)
+    for i in range(3):
+        a, b = tri[i], tri[(i + 1) % 3]
+        dx, dy = b[0] - a[0], b[1] - a[1]
+        e = dx * (py - a[1]) - dy * (px - a[0])
+        top_left = (dy == 0 and dx > 0) or dy < 0
+        inside &= (e >= 0) if top_left else (e > 0)
+    mask[r0:r1 + 1, c0:c1 + 1] = inside
+    return mask
+
+
+def triangle_spans(tri_xy, width, height) -> np.ndarray:
+    """The pixel runs of a rasterised triangle, one per scanline (Q6(c), further).
+
+    Parameters
+    ----------
+    tri_xy : array_like, shape (3, 2)
+        Vertices in pixel coordinates (``y`` down), as for :func:`rasterize_triangle`.
+    width, height : int
+
+    Returns
+    -------
+    spans : ndarray of int, shape (k, 3)
+        Rows ``(row, first_col, last_col)`` (inclusive), one per scanline the triangle covers,
+        in increasing ``row``.
+
+    Notes
+    -----
+    Built from :func:`rasterize_triangle`. That each covered row is a single run of pixels is
+    the property Q6(c) relies on (a triangle is convex); it is asserted as the spans are read.
+    """
+    mask = rasterize_triangle(tri_xy, width, height)
+    rows = np.flatnonzero(mask.any(axis=1))
+    spans = np.empty((len(rows), 3), dtype=np.intp)
+    for k, r in enumerate(rows):
+        cols = np.flatnonzero(mask[r])
+        spans[k] = r, cols[0], cols[-1]
+        assert cols[-1] - cols[0] + 1 == len(cols), "a triangle row must be one run"
+    return spans

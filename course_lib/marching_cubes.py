@@ -1,0 +1,750 @@
+"""Marching cubes: cases, lookup tables, symmetry classes and isosurface extraction (Q3).
+
+Q3 of the 2006 paper asks how marching cubes turns a voxel array into a triangulated isosurface
+(part (a)), why the 256 corner patterns of a cube reduce to 15 cases (part (b)), which cases are
+ambiguous and what goes wrong when their triangulations are mixed (part (c)). Part (d), the
+volume enclosed by the resulting mesh, lives in :mod:`course_lib.mesh`.
+
+Numbering
+---------
+Corners and edges follow Lorensen & Cline (1987) as popularised by Paul Bourke::
+
+        7 ________ 6            corner  (x, y, z)       edge  corners   edge  corners
+         /|      /|               0     (0, 0, 0)         0    0-1        6    6-7
+        / |     / |               1     (1, 0, 0)         1    1-2        7    7-4
+     4 /__|____/5 |               2     (1, 1, 0)         2    2-3        8    0-4
+       |  |____|__|               3     (0, 1, 0)         3    3-0        9    1-5
+       | 3/    |  /2              4     (0, 0, 1)         4    4-5       10    2-6
+       | /     | /                5     (1, 0, 1)         5    5-6       11    3-7
+       |/______|/    z  y         6     (1, 1, 1)
+       0        1    | /          7     (0, 1, 1)
+                     |/___ x
+
+A corner is *inside* when its value is below the iso-level, and bit ``i`` of the case number is
+set when corner ``i`` is inside (:func:`cube_index`).
+
+How the tables are made
+-----------------------
+The 256-entry tables are *generated*, not typed in. For every corner pattern, each of the six
+cube faces gets contour segments joining the crossed edges of that face; on an *ambiguous* face
+(two inside corners on one diagonal, two outside on the other) the rule is always the same: the
+inside corners are kept apart. Because the segments on a face depend only on the four corners
+of that face, the two cells sharing a face always agree on it, so every mesh built from the table
+is watertight. The segments join up into closed loops on the cube's surface; each loop is
+triangulated as a fan. The alternative table :data:`ALT_TRI_TABLE` uses the opposite rule on
+ambiguous faces (inside corners joined): it is what Lorensen's original use of complement
+symmetry produces, and mixing the two tables is what opens the holes of Q3(c).
+
+Faces are wound counter-clockwise seen from the outside (values above the iso-level), so their
+normals point up the gradient of the data, away from the inside region: a blob of low values
+(for example ``|x - c|**2 < r**2``) gets a positive enclosed volume from
+:func:`course_lib.mesh.mesh_volume`.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._validate import as_float_array, as_positive, as_scalar, as_vectors
+
+__all__ = [
+    "ALT_TRI_TABLE",
+    "AMBIGUOUS_CASES",
+    "BASE_CASES",
+    "CORNERS",
+    "EDGES",
+    "EDGE_TABLE",
+    "FACES",
+    "N_TRIANGLES",
+    "TRI_TABLE",
+    "BaseCase",
+    "ambiguous_faces",
+    "case_of",
+    "case_triangles",
+    "cell_triangles",
+    "count_symmetry_classes",
+    "cube_index",
+    "cube_symmetries",
+    "ellipsoid_field",
+    "ellipsoid_volume",
+    "hole_demo",
+    "interpolate_edge",
+    "marching_cubes",
+    "marching_cubes_loop",
+    "sphere_area",
+    "sphere_field",
+    "sphere_volume",
+    "torus_area",
+    "torus_field",
+    "torus_volume",
+]
+
+#: Corner ``i`` of the unit cube, shape (8, 3).
+CORNERS = np.array([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0),
+                    (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)], dtype=np.int64)
+
+#: Edge ``e`` joins corners ``EDGES[e]``. The edges are Lorensen's/Bourke's (0: 0-1, 1: 1-2,
+#: 2: 2-3, 3: 3-0, 4: 4-5, 5: 5-6, 6: 6-7, 7: 7-4, 8: 0-4, 9: 1-5, 10: 2-6, 11: 3-7), each stored
+#: with its corner nearer the origin first, so that the interpolation along an edge runs in the
+#: same direction whichever of the (up to four) cells sharing it asks for it.
+EDGES = np.array([(0, 1), (1, 2), (3, 2), (0, 3), (4, 5), (5, 6), (7, 6), (4, 7),
+                  (0, 4), (1, 5), (2, 6), (3, 7)], dtype=np.int64)
+
+#: The six faces, each as its four corners counter-clockwise seen from outside the cube.
+FACES = np.array([(0, 3, 2, 1),   # z = 0
+                  (4, 5, 6, 7),   # z = 1
+                  (0, 1, 5, 4),   # y = 0
+                  (3, 7, 6, 2),   # y = 1
+                  (0, 4, 7, 3),   # x = 0
+                  (1, 2, 6, 5)],  # x = 1
+                 dtype=np.int64)
+
+
+def _edge_lookup() -> dict:
+    return {frozenset(map(int, pair)): e for e, pair in enumerate(EDGES)}
+
+
+_EDGE_OF = _edge_lookup()
+
+
+def _check_faces() -> None:
+    """Each face is counter-clockwise seen from outside: its normal points away from the centre."""
+    for quad in FACES:
+        p = CORNERS[quad].astype(float)
+        normal = np.cross(p[1] - p[0], p[2] - p[1])
+        assert np.dot(normal, p.mean(axis=0) - 0.5) > 0, quad
+
+
+_check_faces()
+
+
+# --------------------------------------------------------------------------------------------
+# table generation
+
+
+def _face_segments(inside: np.ndarray, quad, join: bool) -> list[tuple[int, int]]:
+    """Directed contour segments ``(edge_from, edge_to)`` on one face.
+
+    Walking the face counter-clockwise (seen from outside), a crossed edge is an *exit* when it
+    goes from an inside corner to an outside one, an *entry* otherwise. A segment runs from an
+    exit to an entry, so the inside region lies on its left. With two crossings there is one
+    segment; with four (an ambiguous face) each exit pairs with the entry just before it
+    (``join=False``: inside corners kept apart) or just after it (``join=True``).
+    """
+    crossings = []
+    for k in range(4):
+        a, b = int(quad[k]), int(quad[(k + 1) % 4])
+        if inside[a] != inside[b]:
+            crossings.append((_EDGE_OF[frozenset((a, b))], bool(inside[a])))
+    n = len(crossings)
+    segments = []
+    for k, (edge, is_exit) in enumerate(crossings):
+        if is_exit:
+            partner = crossings[(k + 1) % n] if (join or n == 2) else crossings[(k - 1) % n]
+            segments.append((edge, partner[0]))
+    return segments
+
+
+def ambiguous_faces(index: int) -> list[int]:
+    """The faces (rows of :data:`FACES`) of case ``index`` whose diagonals disagree (Q3(c))."""
+    inside = _bits(index)
+    out = []
+    for f, quad in enumerate(FACES):
+        s = inside[quad]
+        if s[0] == s[2] and s[1] == s[3] and s[0] != s[1]:
+            out.append(f)
+    return out
+
+
+def _bits(index: int) -> np.ndarray:
+    return np.array([(index >> i) & 1 for i in range(8)], dtype=bool)
+
+
+def _case_loops(index: int, join_faces=()) -> list[list[int]]:
+    """Closed loops of crossed edges for case ``index``; ``join_faces`` use the joining rule."""
+    inside = _bits(index)
+    nxt = {}
+    for f, quad in enumerate(FACES):
+        for a, b in _face_segments(inside, quad, join=f in join_faces):
+            assert a not in nxt
+            nxt[a] = b
+    loops = []
+    while nxt:
+        start = min(nxt)
+        loop = [start]
+        while nxt[loop[-1]] != start:
+            loop.append(nxt.pop(loop[-1]))
+        nxt.pop(loop[-1])
+        loops.append(loop)
+    return loops
+
+
+def case_triangles(index: int, alternative: bool = False) -> np.ndarray:
+    """Triangles of case ``index`` as rows of three edge numbers, shape ``(t, 3)``.
+
+    Each loop of contour segments is reversed (so that the normal points to the outside, the
+    side of values above the iso-level) and triangulated as a fan from its first edge. With
+    ``alternative=True`` every ambiguous face of the cube uses the joining rule instead: this is
+    the other triangulation of the ambiguous cases 3, 6, 7, 10, 12 and 13 of Q3(c).
+    """
+    join = ambiguous_faces(index) if alternative else ()
+    tris = []
+    for loop in _case_loops(index, join):
+        tris.extend(_fan(loop[::-1]))
+    return np.array(tris, dtype=np.int64).reshape(-1, 3)
+
+
+#: For each edge, the two faces (rows of FACES) it lies on.
+_FACES_OF_EDGE = [frozenset(f for f, quad in enumerate(FACES) if a in quad and b in quad)
+                  for a, b in EDGES]
+
+
+def _fan(loop: list[int]) -> list[tuple[int, int, int]]:
+    """Fan triangulation of a loop from the first apex that puts no triangle flat on a face.
+
+    A triangle whose three edges lie on one cube face would lie in that face and overlap the
+    neighbouring cell's surface; fanning from another vertex of the loop avoids it.
+    """
+    n = len(loop)
+    for shift in range(n):
+        rot = loop[shift:] + loop[:shift]
+        fan = [(rot[0], rot[k], rot[k + 1]) for k in range(1, n - 1)]
+        if all(not (_FACES_OF_EDGE[a] & _FACES_OF_EDGE[b] & _FACES_OF_EDGE[c])
+               for a, b, c in fan):
+            return fan
+    raise AssertionError(f"no fan of loop {loop} avoids flat triangles")  # pragma: no cover
+
+
+def _build_tables(alternative: bool):
+    rows = [case_triangles(i, alternative) for i in range(256)]
+    width = max(len(r) for r in rows)
+    table = np.full((256, width, 3), -1, dtype=np.int64)
+    for i, r in enumerate(rows):
+        table[i, :len(r)] = r
+    return table, np.array([len(r) for r in rows], dtype=np.int64)
+
+
+#: ``TRI_TABLE[i, t]`` = edges of triangle ``t`` of case ``i`` (rows of -1 after the last one).
+TRI_TABLE, N_TRIANGLES = _build_tables(False)
+#: The same with ambiguous faces joined (the alternative triangulations); mixing the two tables
+#: leaves holes (Q3(c)).
+ALT_TRI_TABLE, ALT_N_TRIANGLES = _build_tables(True)
+#: ``EDGE_TABLE[i]``: 12-bit mask of the edges crossed in case ``i`` (as in Bourke's table).
+EDGE_TABLE = np.array([sum(1 << e for e in range(12)
+                           if _bits(i)[EDGES[e, 0]] != _bits(i)[EDGES[e, 1]])
+                       for i in range(256)], dtype=np.int64)
+
+
+# --------------------------------------------------------------------------------------------
+# symmetry
+
+
+def cube_symmetries(reflections: bool = False) -> np.ndarray:
+    """The cube's symmetries as corner permutations, shape ``(24, 8)`` or ``(48, 8)``.
+
+    Row ``g`` maps corner ``i`` to corner ``perm[g, i]``. They are the 3 x 3 signed permutation
+    matrices (determinant +1 for the 24 rotations; all 48 with reflections) acting on the
+    corners centred on the origin.
+    """
+    centred = 2 * CORNERS - 1
+    lookup = {tuple(c): i for i, c in enumerate(centred)}
+    perms = []
+    for axes in itertools.permutations(range(3)):
+        for signs in itertools.product((1, -1), repeat=3):
+            m = np.zeros((3, 3), dtype=np.int64)
+            m[range(3), axes] = signs
+            if not reflections and round(np.linalg.det(m)) != 1:
+                continue
+            perms.append([lookup[tuple(m @ c)] for c in centred])
+    return np.array(perms, dtype=np.int64)
+
+
+def _apply(perm: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """Case numbers after moving corner ``i`` to ``perm[i]``."""
+    bits = (indices[:, None] >> np.arange(8)) & 1
+    return (bits << perm[None, :]).sum(axis=1)
+
+
+@functools.cache
+def _orbit_labels(complement: bool, reflections: bool) -> np.ndarray:
+    """For each of the 256 cases, the smallest case number in its symmetry class."""
+    all_cases = np.arange(256)
+    images = [_apply(p, all_cases) for p in cube_symmetries(reflections)]
+    if complement:
+        images += [255 - im for im in images]
+    labels = np.min(images, axis=0)
+    labels.setflags(write=False)
+    return labels
+
+
+def count_symmetry_classes(complement: bool = False, reflections: bool = False) -> int:
+    """Number of classes the 256 corner patterns fall into under the cube's symmetries, Q3(b).
+
+    Parameters
+    ----------
+    complement : bool
+        Also identify a pattern with its complement (inside and outside swapped).
+    reflections : bool
+        Use the 48 symmetries of the cube (rotations and reflections) instead of the 24
+        rotations.
+
+    Returns
+    -------
+    int
+        23 (rotations), 15 (rotations + complement: Lorensen's 15 cases), 22 (rotations +
+        reflections) or 14 (all of them).
+
+    Notes
+    -----
+    Computed by Burnside's lemma: the number of orbits is the average, over the group, of the
+    number of patterns each element leaves fixed; a rotation fixes ``2**c`` patterns where ``c``
+    is the number of its corner cycles, and ``complement o g`` fixes a pattern only when every
+    cycle of ``g`` has even length, and then ``2**c`` of them. (The tests check the result
+    against an explicit orbit enumeration.) Under rotations and complement the cases 11 and 14
+    are distinct mirror images; allowing reflections merges them, which gives 14.
+
+    Examples
+    --------
+    >>> count_symmetry_classes(complement=True)
+    15
+    """
+    group = cube_symmetries(bool(reflections))
+    fixed = 0
+    for perm in group:
+        cycles = _cycle_lengths(perm)
+        fixed += 2 ** len(cycles)
+        if complement:
+            fixed += 2 ** len(cycles) if all(c % 2 == 0 for c in cycles) else 0
+    size = len(group) * (2 if complement else 1)
+    return int(fixed // size)
+
+
+def _cycle_lengths(perm) -> list[int]:
+    seen, lengths = set(), []
+    for start in range(len(perm)):
+        if start in seen:
+            continue
+        n, i = 0, start
+        while i not in seen:
+            seen.add(i)
+            i = int(perm[i])
+            n += 1
+        lengths.append(n)
+    return lengths
+
+
+@dataclass(frozen=True)
+class BaseCase:
+    """One of Lorensen's 15 cases: its number, a representative case index and its inside corners."""
+
+    number: int
+    index: int
+    inside: tuple
+    description: str
+    ambiguous: bool
+
+
+def _case(number, inside, description):
+    index = sum(1 << c for c in inside)
+    return BaseCase(number, index, tuple(inside), description, bool(ambiguous_faces(index)))
+
+
+#: Lorensen's 15 cases, each with a representative case number (``index``) whose inside corners
+#: are listed. Cases 11 and 14 are the two mirror-image "helices" (three cube edges in a
+#: non-planar chain); which one carries which number is a convention.
+BASE_CASES = (
+    _case(0, (), "no corner inside: no triangles"),
+    _case(1, (0,), "one corner cut off by a triangle"),
+    _case(2, (0, 1), "two corners on an edge: a quadrilateral"),
+    _case(3, (0, 2), "two corners on a face diagonal (ambiguous face)"),
+    _case(4, (0, 6), "two corners on a body diagonal: two triangles"),
+    _case(5, (0, 1, 2), "three corners of a face: a pentagon"),
+    _case(6, (0, 1, 6), "an edge and the far corner (ambiguous face)"),
+    _case(7, (1, 3, 4), "three corners pairwise on face diagonals (three ambiguous faces)"),
+    _case(8, (0, 1, 2, 3), "a whole face: one plane, two triangles"),
+    _case(9, (0, 1, 3, 4), "a corner and its three neighbours: a hexagon"),
+    _case(10, (0, 1, 6, 7), "two opposite parallel edges (two ambiguous faces)"),
+    _case(11, (0, 1, 3, 7), "a chain of three edges (one mirror image)"),
+    _case(12, (0, 1, 2, 7), "three corners of a face and one far corner (two ambiguous faces)"),
+    _case(13, (0, 2, 5, 7), "four corners, no two adjacent (six ambiguous faces)"),
+    _case(14, (0, 1, 2, 6), "a chain of three edges (the other mirror image)"),
+)
+
+#: Lorensen's numbers of the cases with an ambiguous face.
+AMBIGUOUS_CASES = tuple(c.number for c in BASE_CASES if c.ambiguous)
+
+
+def case_of(index: int) -> int:
+    """Lorensen's case number (0 ... 14) of case index ``index`` (rotations + complement)."""
+    labels = _orbit_labels(True, False)
+    target = labels[int(index)]
+    for c in BASE_CASES:
+        if labels[c.index] == target:
+            return c.number
+    raise AssertionError("unreachable: the base cases cover every class")  # pragma: no cover
+
+
+# --------------------------------------------------------------------------------------------
+# the graded functions
+
+
+def interpolate_edge(p0, p1, v0, v1, iso):
+    """The point on segment ``p0``-``p1`` where the linearly interpolated value equals ``iso``.
+
+    Q3(a): the lookup table says only *which* edge a vertex lies on; *where* on the edge comes
+    from the data values at the two ends.
+
+    Parameters
+    ----------
+    p0, p1 : array_like, shape (..., 3)
+        End points of the edge.
+    v0, v1 : array_like, shape (...)
+        Data values at ``p0`` and ``p1``.
+    iso : float or array_like, shape (...)
+        The iso-level, between ``v0`` and ``v1`` (inclusive).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``p0 + t (p1 - p0)`` with ``t = (iso - v0) / (v1 - v0)``; ``p0`` where ``v0 == v1 == iso``.
+
+    Raises
+    ------
+    ValueError
+        If the points are not ``(..., 3)``, if the shapes do not broadcast, if ``v0 == v1 != iso``
+        (no crossing), or if ``iso`` is not between ``v0`` and ``v1`` (the crossing would be off
+        the segment).
+
+    Examples
+    --------
+    The exam's example: iso-level 10 between values 7 and 13 lies half way.
+
+    >>> interpolate_edge([0, 0, 0], [1, 0, 0], 7.0, 13.0, 10.0)
+    array([0.5, 0. , 0. ])
+    """
+    p0 = as_vectors(p0, 3, "p0")
+    p1 = as_vectors(p1, 3, "p1")
+    v0 = as_float_array(v0, "v0")
+    v1 = as_float_array(v1, "v1")
+    iso = as_float_array(iso, "iso")
+    try:
+        shape = np.broadcast_shapes(p0.shape[:-1], p1.shape[:-1], v0.shape, v1.shape, iso.shape)
+    except ValueError as exc:
+        raise ValueError(f"p0, p1, v0, v1 and iso do not broadcast together: {exc}") from None
+    dv = v1 - v0
+    flat = dv == 0
+    if np.any(flat & (iso != v0)):
+        raise ValueError("v0 == v1 but iso differs from them: the edge does not cross the iso-level")
+    lo, hi = np.minimum(v0, v1), np.maximum(v0, v1)
+    if np.any((iso < lo) | (iso > hi)):
+        raise ValueError("iso must lie between v0 and v1: otherwise the crossing is off the edge")
+    t = np.where(flat, 0.0, (iso - v0) / np.where(flat, 1.0, dv))
+    out = p0 + t[..., None] * (p1 - p0)
+    return np.broadcast_to(out, shape + (3,)).copy()
+
+
+def cube_index(values, iso):
+    """The 8-bit case number of a cell: bit ``i`` is set when ``values[i] < iso`` (Q3(b)).
+
+    Parameters
+    ----------
+    values : array_like, shape (..., 8)
+        Data values at the eight corners, in the corner order of this module.
+    iso : float
+        The iso-level.
+
+    Returns
+    -------
+    int or ndarray of int, shape (...)
+        A Python ``int`` for one cell, an integer array for a batch.
+
+    Raises
+    ------
+    ValueError
+        If the last axis does not have length 8 or ``iso`` is not a number.
+
+    Examples
+    --------
+    >>> cube_index([0, 9, 9, 9, 9, 9, 9, 9], 5.0)   # only corner 0 below the level
+    1
+    >>> cube_index([0, 0, 9, 9, 9, 9, 9, 9], 5.0)   # corners 0 and 1
+    3
+    """
+    values = as_vectors(values, 8, "values")
+    iso = as_scalar(iso, "iso")
+    index = ((values < iso).astype(np.int64) << np.arange(8)).sum(axis=-1)
+    return int(index) if index.ndim == 0 else index
+
+
+def _check_volume(volume, iso, spacing):
+    volume = as_float_array(volume, "volume")
+    if volume.ndim != 3:
+        raise ValueError(f"volume must be a 3-D array, got {volume.ndim} dimension(s)")
+    if min(volume.shape) < 2:
+        raise ValueError(f"volume needs at least 2 samples along each axis, got {volume.shape}")
+    iso = as_scalar(iso, "iso")
+    spacing = as_positive(spacing, "spacing")
+    if spacing.shape != (3,):
+        raise ValueError(f"spacing must have 3 entries (sx, sy, sz), got shape {spacing.shape}")
+    return volume, iso, spacing
+
+
+def _edge_axis_offset():
+    """For each cube edge: its axis and the offset (di, dj, dk) of its first corner."""
+    axis = np.array([int(np.flatnonzero(CORNERS[b] - CORNERS[a])[0]) for a, b in EDGES])
+    return axis, CORNERS[EDGES[:, 0]]
+
+
+_EDGE_AXIS, _EDGE_START = _edge_axis_offset()
+
+
+def marching_cubes(volume, iso, spacing=(1.0, 1.0, 1.0)):
+    """Triangulated isosurface ``volume == iso`` by marching cubes, Q3(a)-(c).
+
+    Vectorised: every cell is classified at once, the table rows of all cells are gathered in
+    one go, and each crossed grid edge gets one global number, so that neighbouring cells share
+    their vertices and the mesh is watertight wherever the surface stays inside the volume.
+
+    Parameters
+    ----------
+    volume : array_like, shape (nx, ny, nz)
+        Samples on a regular grid; each axis at least 2 long.
+    iso : float
+        The iso-level. A sample is *inside* when it is below ``iso``.
+    spacing : sequence of 3 positive floats
+        Sample spacing ``(sx, sy, sz)``: index ``(i, j, k)`` sits at ``(i*sx, j*sy, k*sz)``.
+
+    Returns
+    -------
+    verts : ndarray, shape (V, 3), float64
+        One vertex per crossed grid edge, ordered by the edges' global numbers (edges along x
+        first, then y, then z, each in C order of their first sample).
+    faces : ndarray, shape (F, 3), int64
+        Triangles as vertex indices, counter-clockwise seen from outside (values above ``iso``):
+        normals point up the gradient. Ambiguous faces always keep inside corners apart.
+
+    Raises
+    ------
+    ValueError
+        If ``volume`` is not 3-D (or has an axis shorter than 2), ``iso`` is not a number or
+        ``spacing`` is not three positive numbers.
+
+    Notes
+    -----
+    The vertex on a crossed edge is the linear interpolation of Q3(a) (:func:`interpolate_edge`):
+    at ``t = (iso - v0) / (v1 - v0)`` from the sample nearer the origin. See
+    :func:`marching_cubes_loop` for the same algorithm written one cell at a time.
+
+    Examples
+    --------
+    >>> vol = np.ones((3, 3, 3)); vol[1, 1, 1] = 0.0
+    >>> verts, faces = marching_cubes(vol, 0.5)
+    >>> verts.shape, faces.shape          # an octahedron around the centre sample
+    ((6, 3), (8, 3))
+    """
+    volume, iso, spacing = _check_volume(volume, iso, spacing)
+    return _march(volume, iso, spacing, TRI_TABLE, N_TRIANGLES)
+
+
+def _march(volume, iso, spacing, table, ntri):
+    nx, ny, nz = volume.shape
+    inside = volume < iso
+    # case number of every cell: bit c from corner c
+    cell_shape = (nx - 1, ny - 1, nz - 1)
+    index = np.zeros(cell_shape, dtype=np.int64)
+    for c, (di, dj, dk) in enumerate(CORNERS):
+        index |= inside[di:di + nx - 1, dj:dj + ny - 1, dk:dk + nz - 1].astype(np.int64) << c
+    cells = np.flatnonzero(ntri[index.ravel()] > 0)
+    counts = ntri[index.ravel()[cells]]
+    cell_rep = np.repeat(cells, counts)
+    slot = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    local = table[index.ravel()[cell_rep], slot]                      # (T, 3) cube edges
+    ijk = np.stack(np.unravel_index(cell_rep, cell_shape), axis=-1)   # (T, 3)
+    # global number of each grid edge: edges along x, then y, then z
+    axis_shapes = [tuple(n - (a == ax) for a, n in enumerate(volume.shape)) for ax in range(3)]
+    offsets = np.cumsum([0] + [int(np.prod(s)) for s in axis_shapes])
+    axis = _EDGE_AXIS[local]                                          # (T, 3)
+    start = ijk[:, None, :] + _EDGE_START[local]                      # (T, 3, 3)
+    gid = np.empty(local.shape, dtype=np.int64)
+    for ax in range(3):
+        sel = axis == ax
+        gid[sel] = offsets[ax] + np.ravel_multi_index(tuple(start[sel].T), axis_shapes[ax])
+    edges, faces = np.unique(gid, return_inverse=True)
+    faces = faces.reshape(-1, 3).astype(np.int64)
+    return _edge_vertices(volume, iso, spacing, edges, offsets, axis_shapes), faces
+
+
+def _edge_vertices(volume, iso, spacing, edges, offsets, axis_shapes):
+    """Interpolated positions of the crossing on each global grid edge."""
+    verts = np.empty((len(edges), 3))
+    for ax in range(3):
+        sel = (edges >= offsets[ax]) & (edges < offsets[ax + 1])
+        i0 = np.stack(np.unravel_index(edges[sel] - offsets[ax], axis_shapes[ax]), axis=-1)
+        i1 = i0.copy()
+        i1[:, ax] += 1
+        v0 = volume[tuple(i0.T)]
+        v1 = volume[tuple(i1.T)]
+        t = (iso - v0) / (v1 - v0)
+        p0 = i0 * spacing
+        verts[sel] = p0 + t[:, None] * ((i1 - i0) * spacing)
+    return verts
+
+
+def marching_cubes_loop(volume, iso, spacing=(1.0, 1.0, 1.0)):
+    """Marching cubes one cell at a time: the readable version of :func:`marching_cubes`.
+
+    Same parameters, results and errors as :func:`marching_cubes` (the tests check that both
+    give the same mesh). It is slow (a Python loop over every cell) and is here to be read:
+
+    1. for each cell, read its 8 corner values and form the case number (:func:`cube_index`);
+    2. look up the triangles of that case in :data:`TRI_TABLE` (edges, not positions);
+    3. for each edge of a triangle, reuse the vertex of that grid edge if a neighbouring cell
+       already made it, otherwise interpolate a new one along the edge (:func:`interpolate_edge`).
+    """
+    volume, iso, spacing = _check_volume(volume, iso, spacing)
+    return _march_loop(volume, iso, spacing, alternative_cells=())
+
+
+def _march_loop(volume, iso, spacing, alternative_cells=()):
+    nx, ny, nz = volume.shape
+    vertex_of_edge = {}   # grid edge (start sample, axis) -> vertex number
+    verts, faces = [], []
+    for i in range(nx - 1):
+        for j in range(ny - 1):
+            for k in range(nz - 1):
+                values = [volume[i + dx, j + dy, k + dz] for dx, dy, dz in CORNERS]
+                case = cube_index(values, iso)
+                alt = (i, j, k) in alternative_cells
+                table = ALT_TRI_TABLE if alt else TRI_TABLE
+                for tri in table[case]:
+                    if tri[0] < 0:
+                        break
+                    face = []
+                    for e in tri:
+                        a, b = EDGES[e]
+                        start = (i + CORNERS[a][0], j + CORNERS[a][1], k + CORNERS[a][2])
+                        key = (start, int(_EDGE_AXIS[e]))
+                        if key not in vertex_of_edge:
+                            end = (i + CORNERS[b][0], j + CORNERS[b][1], k + CORNERS[b][2])
+                            p = interpolate_edge(np.multiply(start, spacing),
+                                                 np.multiply(end, spacing),
+                                                 volume[start], volume[end], iso)
+                            vertex_of_edge[key] = len(verts)
+                            verts.append(p)
+                        face.append(vertex_of_edge[key])
+                    faces.append(face)
+    return (np.array(verts, dtype=np.float64).reshape(-1, 3),
+            np.array(faces, dtype=np.int64).reshape(-1, 3))
+
+
+def cell_triangles(values, iso, alternative: bool = False) -> np.ndarray:
+    """The triangles of one unit cell as coordinates, shape ``(t, 3, 3)``.
+
+    ``values`` are the eight corner values (corner order of this module); the case comes from
+    :func:`cube_index`, the triangles from :data:`TRI_TABLE` (or :data:`ALT_TRI_TABLE`), and
+    each vertex is interpolated along its edge (:func:`interpolate_edge`). Used by the figures
+    and the case explorer.
+    """
+    values = as_vectors(values, 8, "values")
+    if values.shape != (8,):
+        raise ValueError(f"values must have shape (8,), got shape {values.shape}")
+    case = cube_index(values, iso)
+    table, ntri = (ALT_TRI_TABLE, ALT_N_TRIANGLES) if alternative else (TRI_TABLE, N_TRIANGLES)
+    edges = table[case, :ntri[case]]                                    # (t, 3)
+    a, b = EDGES[edges, 0], EDGES[edges, 1]
+    v0, v1 = values[a], values[b]
+    t = (float(iso) - v0) / (v1 - v0)
+    return CORNERS[a] + t[..., None] * (CORNERS[b] - CORNERS[a])
+
+
+# --------------------------------------------------------------------------------------------
+# the hole of Q3(c)
+
+
+def hole_demo(alternative: bool = True):
+    """Two cells sharing an ambiguous face, triangulated inconsistently: the hole of Q3(c).
+
+    The volume is 5 x 4 x 4 samples of value 1 (outside) with two samples of value 0 (inside)
+    at ``(2, 1, 1)`` and ``(2, 2, 2)``: on the face ``x = 2`` shared by cells ``(1, 1, 1)`` and
+    ``(2, 1, 1)`` they sit on one diagonal, the outside samples on the other. The consistent
+    table cuts each inside sample off by its own closed surface. Here cell ``(1, 1, 1)`` uses
+    the *alternative* triangulation (inside corners joined across the face) while its neighbour
+    keeps them apart: the two cells disagree on the shared face and a hole opens there.
+
+    Parameters
+    ----------
+    alternative : bool
+        ``False`` gives the consistent mesh of the same volume (closed, no hole).
+
+    Returns
+    -------
+    volume : ndarray, shape (5, 4, 4)
+    verts : ndarray, shape (V, 3)
+    faces : ndarray, shape (F, 3)
+        Iso-level 0.5, unit spacing; see :func:`course_lib.mesh.boundary_edges` for the hole.
+    """
+    volume = np.ones((5, 4, 4))
+    volume[2, 1, 1] = 0.0
+    volume[2, 2, 2] = 0.0
+    cells = {(1, 1, 1)} if alternative else set()
+    verts, faces = _march_loop(volume, 0.5, np.ones(3), alternative_cells=cells)
+    return volume, verts, faces
+
+
+# --------------------------------------------------------------------------------------------
+# analytic test volumes
+
+
+def _grid(shape, spacing):
+    axes = [np.arange(n) * s for n, s in zip(shape, spacing)]
+    return np.meshgrid(*axes, indexing="ij")
+
+
+def sphere_field(shape, centre, spacing=(1.0, 1.0, 1.0)):
+    """``|x - centre|**2`` sampled at ``(i*sx, j*sy, k*sz)``: iso ``r**2`` is a sphere of radius r."""
+    x, y, z = _grid(shape, spacing)
+    cx, cy, cz = centre
+    return (x - cx) ** 2 + (y - cy) ** 2 + (z - cz) ** 2
+
+
+def ellipsoid_field(shape, centre, semi_axes, spacing=(1.0, 1.0, 1.0)):
+    """``sum(((x - c) / a)**2)``: iso 1 is the ellipsoid with semi-axes ``a``."""
+    x, y, z = _grid(shape, spacing)
+    (cx, cy, cz), (a, b, c) = centre, semi_axes
+    return ((x - cx) / a) ** 2 + ((y - cy) / b) ** 2 + ((z - cz) / c) ** 2
+
+
+def torus_field(shape, centre, R, spacing=(1.0, 1.0, 1.0)):
+    """``(sqrt((x-cx)**2 + (y-cy)**2) - R)**2 + (z-cz)**2``: iso ``r**2`` is a torus (axis z)."""
+    x, y, z = _grid(shape, spacing)
+    cx, cy, cz = centre
+    return (np.hypot(x - cx, y - cy) - R) ** 2 + (z - cz) ** 2
+
+
+def sphere_volume(r: float) -> float:
+    """``4/3 pi r**3``."""
+    return 4.0 / 3.0 * np.pi * r ** 3
+
+
+def sphere_area(r: float) -> float:
+    """``4 pi r**2``."""
+    return 4.0 * np.pi * r ** 2
+
+
+def ellipsoid_volume(a: float, b: float, c: float) -> float:
+    """``4/3 pi a b c``."""
+    return 4.0 / 3.0 * np.pi * a * b * c
+
+
+def torus_volume(R: float, r: float) -> float:
+    """``2 pi**2 R r**2`` (Pappus)."""
+    return 2.0 * np.pi ** 2 * R * r ** 2
+
+
+def torus_area(R: float, r: float) -> float:
+    """``4 pi**2 R r`` (Pappus)."""
+    return 4.0 * np.pi ** 2 * R * r

@@ -1,0 +1,275 @@
+"""Clipping explorer (exam Q6(b)(iii)): a polygon against the view volume, one plane at a time.
+
+A slider (or the Previous/Next buttons) steps through the six Sutherland-Hodgman passes (left,
+right, bottom, top, near, far); a drop-down picks a vertex and four sliders move it in
+homogeneous coordinates ``[X, Y, Z, w]`` (so you can watch a vertex go behind the eye, ``w < 0``,
+and see the naive divide throw it in front). The left panel is 3-D screen space with the view
+volume and the plane being applied; the right panel looks along one screen axis. All artists are
+updated in place.
+
+In JupyterLab run ``%matplotlib widget`` first, then::
+
+    from course_lib.widgets.clipping import clipping_explorer
+    clipping_explorer()
+"""
+
+from __future__ import annotations
+
+import time
+
+import ipywidgets as widgets
+import matplotlib.pyplot as plt
+import numpy as np
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+from .. import clipping
+from ..plots.clipping import _closed, plot_clipping_2d, plot_view_volume, screen_points
+
+#: A triangle that sticks out of the volume through four planes, w != 1 for two vertices.
+DEFAULT_POLYGON = np.array([
+    [-1.5, -0.3, 0.5, 1.0],
+    [1.2, -1.4, 0.3, 1.0],
+    [0.8, 3.2, 2.8, 2.0],
+    [-0.6, 1.1, 0.6, 0.5],
+])
+
+#: The six planes as quads in screen space (the faces of the box), in the order of PLANES.
+_FACES = np.array([
+    [[-1, -1, 0], [-1, 1, 0], [-1, 1, 1], [-1, -1, 1]],
+    [[1, -1, 0], [1, 1, 0], [1, 1, 1], [1, -1, 1]],
+    [[-1, -1, 0], [1, -1, 0], [1, -1, 1], [-1, -1, 1]],
+    [[-1, 1, 0], [1, 1, 0], [1, 1, 1], [-1, 1, 1]],
+    [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]],
+    [[-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]],
+], dtype=float)
+
+_COORDS = ("X", "Y", "Z", "w")
+
+
+class ClippingExplorer:
+    """Step a homogeneous polygon through the six clipping planes and move its vertices.
+
+    Parameters
+    ----------
+    P : array_like, shape (n, 4), optional
+        The polygon in homogeneous screen coordinates (default :data:`DEFAULT_POLYGON`).
+    dims : pair of ints
+        Screen axes of the right-hand panel: ``(0, 1)`` the screen, ``(1, 2)`` a side view
+        (use it for the exam's edge-on triangles).
+
+    Attributes
+    ----------
+    P : ndarray
+        The current polygon (changed by the vertex sliders).
+    steps : list of ndarray
+        :func:`course_lib.clipping.clip_steps` of ``P``: ``steps[k]`` after ``k`` planes.
+    step, prev_button, next_button, vertex, coord_sliders
+        The controls; set their values from Python to drive the explorer.
+    art3d, art2d : dict
+        The artists updated in place.
+    last_update_ms : float
+        Time taken by the last :meth:`update` to recompute and set the artists (not drawing).
+    """
+
+    def __init__(self, P=None, dims=(0, 1)):
+        self.P = np.array(DEFAULT_POLYGON if P is None else P, dtype=float)
+        if self.P.ndim != 2 or self.P.shape[1] != 4 or len(self.P) < 3:
+            raise ValueError(f"P must have shape (n, 4) with n >= 3, got {self.P.shape}")
+        self.dims = tuple(dims)
+        self.steps = clipping.clip_steps(self.P)
+        self.last_update_ms = 0.0
+        self._syncing = False
+
+        with plt.ioff():
+            self.fig = plt.figure(figsize=(10.0, 4.6))
+        self.fig.set_layout_engine("constrained")
+        ax3 = self.fig.add_subplot(1, 2, 1, projection="3d")
+        ax2 = self.fig.add_subplot(1, 2, 2)
+        self.ax3d, self.ax2d = ax3, ax2
+
+        # 3-D panel: the box, the active plane, the input and the current polygon.
+        self.art3d = {"box": plot_view_volume(ax3)}
+        plane = Poly3DCollection([_FACES[0]], facecolor="#d62728", alpha=0.18,
+                                 edgecolor="#d62728")
+        ax3.add_collection3d(plane)
+        self.art3d["plane"] = plane
+        (self.art3d["input"],) = ax3.plot([], [], [], ls="--", marker="o", ms=3,
+                                          color="#7f7f7f", label="input, divided by w")
+        poly = Poly3DCollection([], facecolor="#1f77b4", alpha=0.35, edgecolor="none")
+        ax3.add_collection3d(poly)
+        self.art3d["polygon"] = poly
+        (self.art3d["edges"],) = ax3.plot([], [], [], color="#1f77b4", lw=2,
+                                          label="after these planes")
+        (self.art3d["vertices"],) = ax3.plot([], [], [], ls="none", marker="o", ms=5,
+                                             color="#d62728")
+        ax3.set_xlim(-2, 2)
+        ax3.set_ylim(-2, 2)
+        ax3.set_zlim(-0.5, 1.5)
+        ax3.legend(loc="upper left", fontsize=7)
+
+        # 2-D panel: reuse the static figure's artists.
+        self.art2d = plot_clipping_2d(self.P, ax=ax2, dims=self.dims, clipped=self.P)
+        for text in self.art2d["labels"]:
+            text.remove()
+        self.art2d["labels"] = []
+        i, j = self.dims
+        lo = np.array([-1.0, -1.0, 0.0])[[i, j]]
+        hi = np.array([1.0, 1.0, 1.0])[[i, j]]
+        span = np.max(hi - lo)
+        ax2.set_xlim(lo[0] - span, hi[0] + span)
+        ax2.set_ylim(lo[1] - span, hi[1] + span)
+        (self.art2d["plane"],) = ax2.plot([], [], color="#d62728", lw=3, alpha=0.6)
+        self.status = self.fig.suptitle("", fontsize=10)
+
+        # Controls.
+        n = len(self.P)
+        self.step = widgets.IntSlider(value=0, min=0, max=6, description="planes",
+                                      continuous_update=True)
+        self.prev_button = widgets.Button(description="Previous", icon="step-backward",
+                                          layout=widgets.Layout(width="110px"))
+        self.next_button = widgets.Button(description="Next", icon="step-forward",
+                                          layout=widgets.Layout(width="110px"))
+        self.vertex = widgets.Dropdown(options=[(f"vertex {k}", k) for k in range(n)], value=0,
+                                       description="move", layout=widgets.Layout(width="180px"))
+        self.coord_sliders = [
+            widgets.FloatSlider(value=float(self.P[0, c]), min=lo_, max=hi_, step=0.05,
+                                description=name, continuous_update=True, readout_format=".2f")
+            for c, (name, lo_, hi_) in enumerate(zip(_COORDS, (-4, -4, -4, -1.5),
+                                                     (4, 4, 4, 4)))]
+        self.readout = widgets.HTML()
+        self.step.observe(self._on_step, names="value")
+        self.prev_button.on_click(lambda _: self._nudge(-1))
+        self.next_button.on_click(lambda _: self._nudge(+1))
+        self.vertex.observe(self._on_vertex, names="value")
+        for s in self.coord_sliders:
+            s.observe(self._on_coord, names="value")
+        self.controls = widgets.VBox([
+            widgets.HBox([self.step, self.prev_button, self.next_button]),
+            widgets.HBox([self.vertex, *self.coord_sliders[:2]]),
+            widgets.HBox([widgets.Label(layout=widgets.Layout(width="180px")),
+                          *self.coord_sliders[2:]]),
+            self.readout,
+        ])
+        self.update()
+
+    # -- callbacks ---------------------------------------------------------------------------
+
+    def _nudge(self, delta: int):
+        self.step.value = int(np.clip(self.step.value + delta, 0, 6))
+
+    def _on_step(self, _change):
+        self.update(recompute=False)
+
+    def _on_vertex(self, change):
+        self._syncing = True
+        try:
+            for c, s in enumerate(self.coord_sliders):
+                s.value = float(self.P[change["new"], c])
+        finally:
+            self._syncing = False
+
+    def _on_coord(self, _change):
+        if self._syncing:
+            return
+        k = self.vertex.value
+        self.P[k] = [s.value for s in self.coord_sliders]
+        self.update()
+
+    # -- drawing -------------------------------------------------------------------------------
+
+    def update(self, recompute: bool = True):
+        """Recompute the clipping steps (if the polygon changed) and update every artist."""
+        t0 = time.perf_counter()
+        k = self.step.value
+        if recompute:
+            try:
+                self.steps = clipping.clip_steps(self.P)
+                self.error = None
+            except ValueError as exc:            # e.g. a vertex moved to [0, 0, 0, 0]
+                self.steps = [self.P] + [np.zeros((0, 4))] * 6
+                self.error = str(exc)
+        current = self.steps[k]
+        inp = _closed(screen_points(self.P))
+        cur = screen_points(current)
+        cur_closed = _closed(cur)
+
+        a3 = self.art3d
+        a3["input"].set_data_3d(*inp.T)
+        a3["polygon"].set_verts([cur] if len(cur) >= 3 else [])
+        a3["edges"].set_data_3d(*(cur_closed.T if len(cur) else ([], [], [])))
+        a3["vertices"].set_data_3d(*(cur.T if len(cur) else ([], [], [])))
+        if k > 0:
+            a3["plane"].set_verts([_FACES[k - 1]])
+            a3["plane"].set_visible(True)
+        else:
+            a3["plane"].set_visible(False)
+
+        i, j = self.dims
+        a2 = self.art2d
+        a2["original"].set_data(inp[:, i], inp[:, j])
+        if len(cur):
+            a2["clipped"].set_xy(cur[:, [i, j]])
+            a2["clipped"].set_visible(True)
+        else:
+            a2["clipped"].set_visible(False)
+        a2["clipped_vertices"].set_data(cur[:, i], cur[:, j])
+        self._plane_line_2d(k)
+
+        if self.error:
+            title = f"cannot clip: {self.error}"
+        elif k == 0:
+            title = f"input: {len(current)} vertices, inside = " + \
+                ", ".join("yes" if v else "no" for v in clipping.inside_view_volume(self.P))
+        else:
+            title = (f"after plane {k} of 6, {clipping.PLANE_NAMES[k - 1]}: "
+                     f"{len(current)} vertices" + ("" if len(current) >= 3 else " (nothing left)"))
+        self.status.set_text(title)
+        self.readout.value = self._table(current)
+        self.last_update_ms = 1000 * (time.perf_counter() - t0)
+        self.fig.canvas.draw_idle()
+
+    def _plane_line_2d(self, k):
+        """The active plane seen edge-on in the 2-D panel (when it is perpendicular to it)."""
+        line = self.art2d["plane"]
+        if k == 0:
+            line.set_data([], [])
+            return
+        face = _FACES[k - 1][:, list(self.dims)]
+        if np.ptp(face[:, 0]) == 0 or np.ptp(face[:, 1]) == 0:
+            line.set_data(face[[0, 2], 0], face[[0, 2], 1])
+        else:                                        # the plane faces us: outline it
+            line.set_data(*_closed(face).T)
+
+    @staticmethod
+    def _table(P) -> str:
+        if len(P) == 0:
+            return "<i>no vertices</i>"
+        rows = "".join(
+            f"<tr><td>{k}</td>" + "".join(f"<td>{v:.3f}</td>" for v in p) +
+            "".join(f"<td>{v:.3f}</td>" for v in (p[:3] / p[3] if p[3] else [np.nan] * 3)) +
+            "</tr>" for k, p in enumerate(P))
+        head = "".join(f"<th>{h}</th>" for h in
+                       ("#", "X", "Y", "Z", "w", "x<sub>s</sub>", "y<sub>s</sub>", "z<sub>s</sub>"))
+        return f"<table style='font-family:monospace'><tr>{head}</tr>{rows}</table>"
+
+    # -- display -------------------------------------------------------------------------------
+
+    def widget(self):
+        """The controls and the figure in one box (with ipympl the canvas is itself a widget)."""
+        if isinstance(self.fig.canvas, widgets.DOMWidget):
+            return widgets.VBox([self.controls, self.fig.canvas])
+        return self.controls                       # inline/Agg: the figure is shown as an image
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        if isinstance(self.fig.canvas, widgets.DOMWidget):
+            display(self.widget())
+        else:                                           # inline/Agg: controls + a static image
+            display(self.controls)
+            display(self.fig)
+
+
+def clipping_explorer(P=None, dims=(0, 1)) -> ClippingExplorer:
+    """A :class:`ClippingExplorer` for polygon ``P`` (homogeneous, ``(n, 4)``)."""
+    return ClippingExplorer(P, dims=dims)

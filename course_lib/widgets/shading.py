@@ -1,0 +1,278 @@
+"""The Phong explorer of Q5: one sphere shaded by Phong and by Blinn-Phong, side by side.
+
+:class:`PhongExplorer` renders a unit sphere, seen orthographically, lit by a directional light,
+under both specular models of Q5(a) and Q5(c). Sliders set the coefficients ``ka``, ``kd``,
+``ks``, the exponent ``n``, the surface colour (a colour picker) and the directions of the light
+and the viewer (azimuth and elevation); each highlight's rendered peak is ringed and the
+analytic position (the point whose normal is ``H``) crossed. A probe point (the exam's normal
+``N = (0, 1/2, sqrt(3)/2)`` by default) is marked with a square and its RGB intensity printed
+under both models. The button "Exam Q5(b)" loads the worked example, whose Phong intensity is
+``(0.0931, 0.0931, 0.699)``.
+
+Every change calls :meth:`PhongExplorer.update`, which re-renders into the existing images with
+``set_data`` (two 128 x 128 renders, a few milliseconds) and moves the markers.
+
+In a notebook::
+
+    %matplotlib widget
+    from course_lib.widgets.shading import phong_explorer
+    phong_explorer()
+
+Directions: azimuth ``a`` from the x axis towards y, elevation ``e`` from the xy plane towards z:
+``d = (cos e cos a, cos e sin a, sin e)``; the screen's up is the world's z axis.
+"""
+
+from __future__ import annotations
+
+import ipywidgets as W
+import matplotlib.pyplot as plt
+import numpy as np
+
+from .. import shading
+from ..plots.shading import sphere_pair, update_sphere_pair
+from ..plotting import new_figure
+
+__all__ = ["PhongExplorer", "angles", "direction", "hex_to_rgb", "phong_explorer", "rgb_to_hex"]
+
+
+def direction(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
+    """Unit vector of the given azimuth (from x towards y) and elevation (above the xy plane)."""
+    a, e = np.radians(azimuth_deg), np.radians(elevation_deg)
+    return np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+
+
+def angles(v) -> tuple[float, float]:
+    """``(azimuth, elevation)`` in degrees of the direction ``v`` (inverse of :func:`direction`)."""
+    v = shading.normalize(v)
+    return float(np.degrees(np.arctan2(v[1], v[0]))), float(np.degrees(np.arcsin(v[2])))
+
+
+def hex_to_rgb(text: str) -> np.ndarray:
+    """``"#rrggbb"`` (or ``"#rgb"``) as RGB fractions in [0, 1]."""
+    h = text.strip().lstrip("#")
+    if len(h) == 3:
+        h = "".join(c * 2 for c in h)
+    if len(h) != 6:
+        raise ValueError(f"colour must be '#rrggbb', got {text!r}")
+    return np.array([int(h[i:i + 2], 16) / 255.0 for i in (0, 2, 4)])
+
+
+def rgb_to_hex(rgb) -> str:
+    """RGB fractions as ``"#rrggbb"``."""
+    r = np.clip(np.round(np.asarray(rgb, dtype=float) * 255), 0, 255).astype(int)
+    return "#{:02x}{:02x}{:02x}".format(*r)
+
+
+#: The worked example of Q5(b) in the explorer's controls.
+_EXAM_L = angles(shading.EXAM_Q5B["L"])
+_EXAM_V = angles(shading.EXAM_Q5B["V"])
+EXAM_SETTINGS = {
+    "colour": "#0000ff", "ka": 0.5, "kd": 0.5, "ks": 1.0, "n": 10.0,
+    "light_azimuth": _EXAM_L[0], "light_elevation": _EXAM_L[1],
+    "view_azimuth": _EXAM_V[0], "view_elevation": _EXAM_V[1],
+}
+
+
+class PhongExplorer:
+    """Phong vs Blinn-Phong on a shaded sphere (Q5(a)-(c)).
+
+    Parameters
+    ----------
+    size : int
+        Pixels per side of each rendering.
+    probe : array_like, shape (3,)
+        A surface normal whose intensity is printed (the exam's ``N`` by default).
+
+    Attributes
+    ----------
+    fig, axes, art
+        The figure, its two axes and the artists of :func:`~course_lib.plots.shading.sphere_pair`.
+    ka, kd, ks, n, colour, light_azimuth, light_elevation, view_azimuth, view_elevation
+        The controls (ipywidgets); ``Ia = Ip = 1``.
+    exam_button : ipywidgets.Button
+        Loads the Q5(b) example.
+    readout : ipywidgets.HTML
+        Directions, half-way vector and the probe's intensities.
+    peaks : list
+        The two rendered highlight pixels ``(row, col)`` (or ``None``) after the last update.
+    probe_values : dict
+        ``{"phong": (3,) array, "blinn": (3,) array}`` at the probe, or ``None`` values when the
+        probe is on the hidden side of the sphere.
+    """
+
+    def __init__(self, size: int = 128, probe=None):
+        self.size = int(size)
+        self.probe = shading.normalize(shading.EXAM_Q5B["N"] if probe is None else probe)
+        slider = {"continuous_update": True, "style": {"description_width": "110px"},
+                  "layout": W.Layout(width="330px")}
+        self.ka = W.FloatSlider(0.2, min=0.0, max=1.0, step=0.01, description="ka (ambient)",
+                                **slider)
+        self.kd = W.FloatSlider(0.6, min=0.0, max=1.0, step=0.01, description="kd (diffuse)",
+                                **slider)
+        self.ks = W.FloatSlider(0.8, min=0.0, max=1.0, step=0.01, description="ks (specular)",
+                                **slider)
+        self.n = W.FloatLogSlider(20.0, base=10, min=0, max=3, step=0.01,
+                                  description="n (exponent)", **slider)
+        self.colour = W.ColorPicker(value="#3366ff", description="colour c",
+                                    style={"description_width": "110px"})
+        self.light_azimuth = W.FloatSlider(-45.0, min=-180, max=180, step=0.5,
+                                           description="light azimuth°", **slider)
+        self.light_elevation = W.FloatSlider(35.0, min=-90, max=90, step=0.5,
+                                             description="light elevation°", **slider)
+        self.view_azimuth = W.FloatSlider(90.0, min=-180, max=180, step=0.5,
+                                          description="viewer azimuth°", **slider)
+        self.view_elevation = W.FloatSlider(0.0, min=-90, max=90, step=0.5,
+                                            description="viewer elevation°", **slider)
+        self.exam_button = W.Button(description="Exam Q5(b)", button_style="info",
+                                    tooltip="L ∝ (1,−1,1), N = (0, ½, √3/2), V = (0,1,0), n = 10, "
+                                            "blue surface, Ia ka = Ip kd = 0.5, Ip ks = 1")
+        self.readout = W.HTML()
+        self.peaks = [None, None]
+        self.probe_values = {"phong": None, "blinn": None}
+        self._layout = None
+        self._output = None
+        self._holding = False
+
+        with plt.ioff():
+            self.fig, axes = new_figure(2, size=3.4)
+        self.axes = list(np.ravel(axes))
+        canvas = self.fig.canvas
+        for attr, value in (("header_visible", False), ("resizable", False)):
+            if hasattr(canvas, attr):
+                setattr(canvas, attr, value)
+        args = self._args()
+        self.art = sphere_pair(*args, size=self.size, axes=self.axes)
+        self.probe_markers = [ax.plot([], [], "s", mfc="none", mec="#ffeb3b", ms=8, mew=1.5)[0]
+                              for ax in self.axes]
+        for w in self.controls:
+            w.observe(self._on_change, names="value")
+        self.exam_button.on_click(self.load_exam)
+        self.update()
+
+    # ---------------------------------------------------------------------------------------
+    # the model
+
+    @property
+    def controls(self):
+        return (self.ka, self.kd, self.ks, self.n, self.colour, self.light_azimuth,
+                self.light_elevation, self.view_azimuth, self.view_elevation)
+
+    @property
+    def L(self) -> np.ndarray:
+        """Unit vector towards the light."""
+        return direction(self.light_azimuth.value, self.light_elevation.value)
+
+    @property
+    def V(self) -> np.ndarray:
+        """Unit vector towards the viewer."""
+        return direction(self.view_azimuth.value, self.view_elevation.value)
+
+    def _args(self):
+        return (hex_to_rgb(self.colour.value), 1.0, self.ka.value, 1.0, self.kd.value,
+                self.ks.value, self.n.value, self.L, self.V)
+
+    def update(self):
+        """Re-render both spheres in place, refresh the markers and the readout, redraw."""
+        self.refresh()
+        self._redraw()
+
+    def refresh(self):
+        """The per-update compute: two renders into the images (``set_data``), the markers and
+        the readout; no drawing."""
+        args = self._args()
+        self.peaks = update_sphere_pair(self.art, *args, size=self.size)
+        L, V = self.L, self.V
+        basis = shading.view_basis(V)
+        visible = float(self.probe @ V) > 0
+        if visible:
+            x, y = self.probe @ basis[0], self.probe @ basis[1]
+            col, row = (x + 1) * self.size / 2 - 0.5, (1 - y) * self.size / 2 - 0.5
+            for m in self.probe_markers:
+                m.set_data([col], [row])
+        else:
+            for m in self.probe_markers:
+                m.set_data([], [])
+        for key, model in (("phong", shading.phong), ("blinn", shading.blinn_phong)):
+            try:
+                self.probe_values[key] = model(*args[:7], L, self.probe, V) if visible else None
+            except ValueError:
+                self.probe_values[key] = None
+        self.readout.value = self._readout_html(L, V)
+
+    def _readout_html(self, L, V) -> str:
+        def vec(v):
+            return "(" + ", ".join(f"{x:+.3f}" for x in v) + ")"
+
+        def rgb(v):
+            return "—  (probe hidden)" if v is None else "(" + ", ".join(f"{x:.4f}" for x in v) + ")"
+
+        try:
+            H = vec(shading.halfway(L, V))
+        except ValueError:
+            H = "undefined (V = −L)"
+        return (
+            "<div style='font-family: monospace; font-size: 12px; line-height: 1.5'>"
+            f"L = {vec(L)}<br>V = {vec(V)}<br>H = {H}<br>"
+            f"probe N = {vec(self.probe)} (yellow square)<br>"
+            f"<b>Phong</b> I = {rgb(self.probe_values['phong'])}<br>"
+            f"<b>Blinn-Phong</b> I = {rgb(self.probe_values['blinn'])}</div>"
+        )
+
+    def load_exam(self, *_):
+        """Set the controls to the Q5(b) example (one update at the end)."""
+        self.set(**EXAM_SETTINGS)
+
+    def set(self, **values):
+        """Set several controls at once (``ka=0.3, light_azimuth=10, colour="#ff0000"``, ...)
+        and update once."""
+        self._holding = True
+        try:
+            for name, value in values.items():
+                getattr(self, name).value = value
+        finally:
+            self._holding = False
+        self.update()
+
+    def _on_change(self, change):
+        if not self._holding:
+            self.update()
+
+    # ---------------------------------------------------------------------------------------
+    # display
+
+    def _redraw(self):
+        if self._output is not None:
+            from IPython.display import display
+
+            with self._output:
+                self._output.clear_output(wait=True)
+                display(self.fig)
+        else:
+            self.fig.canvas.draw_idle()
+
+    @property
+    def widget(self):
+        """The explorer's layout: the two spheres above the controls and the readout."""
+        if self._layout is None:
+            canvas = self.fig.canvas
+            if isinstance(canvas, W.DOMWidget):  # ipympl
+                view = canvas
+            else:  # inline backend: redraw the figure into an Output widget
+                self._output = W.Output()
+                view = self._output
+            left = W.VBox([self.ka, self.kd, self.ks, self.n, self.colour])
+            right = W.VBox([self.light_azimuth, self.light_elevation, self.view_azimuth,
+                            self.view_elevation, self.exam_button])
+            self._layout = W.VBox([view, W.HBox([left, right]), self.readout])
+            self._redraw()
+        return self._layout
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        display(self.widget)
+
+
+def phong_explorer(size: int = 128) -> PhongExplorer:
+    """The Q5 Phong explorer (display it as a cell's last expression)."""
+    return PhongExplorer(size=size)

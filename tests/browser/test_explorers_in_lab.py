@@ -1,0 +1,127 @@
+"""The explorers in a real JupyterLab in a real browser (issue: interactive explorers).
+
+For the q4 and q5 notebooks: open the notebook, run all cells, find the explorer's figure,
+move a control, and assert that the rendered figure changed (pixels of the ipympl canvas).
+Also check that nbgrader's JupyterLab extension is there for students (the Validate button and
+the Nbgrader menu). Screenshots are kept under ``test-artifacts/browser/``.
+"""
+
+from __future__ import annotations
+
+import io
+import time
+
+import numpy as np
+import pytest
+
+pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.xdist_group("browser")]
+
+
+def open_and_run_all(page, base, token, name, artifacts, timeout_s=240):
+    page.goto(f"{base}/lab/tree/{name}?token={token}&reset")
+    page.wait_for_selector(".jp-NotebookPanel .jp-Notebook .jp-Cell")
+    page.wait_for_selector(".jp-Notebook-ExecutionIndicator, .jp-StatusBar-TextItem", timeout=60_000)
+    _wait_idle(page, 60)
+    page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
+    page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+    time.sleep(1.0)
+    _wait_idle(page, timeout_s)
+    page.screenshot(path=str(artifacts / f"{name}-after-run-all.png"), full_page=False)
+    errors = page.locator(".jp-OutputArea-output[data-mime-type='application/vnd.jupyter.stderr']")
+    tracebacks = [t for t in errors.all_inner_texts() if "Traceback" in t or "Error" in t.split("\n")[0]]
+    assert not tracebacks, f"{name}: errors after Run All:\n" + "\n---\n".join(tracebacks)[:3000]
+
+
+def _wait_idle(page, timeout_s):
+    """Until the kernel is idle and no cell shows a pending prompt [*]."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        status = page.locator(".jp-StatusBar-Widget").all_inner_texts()
+        busy = page.locator(".jp-InputArea-prompt", has_text="[*]").count()
+        if busy == 0 and any("Idle" in s for s in status):
+            return
+        time.sleep(0.5)
+    raise AssertionError(f"kernel still busy after {timeout_s} s")
+
+
+def canvas_pixels(locator) -> np.ndarray:
+    from PIL import Image
+
+    locator.scroll_into_view_if_needed()
+    png = locator.screenshot()
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=np.int16)
+
+
+def changed_fraction(a: np.ndarray, b: np.ndarray) -> float:
+    if a.shape != b.shape:
+        return 1.0
+    return float(np.mean(np.any(np.abs(a - b) > 8, axis=-1)))
+
+
+def wait_for_change(locator, before, timeout_s=20.0, min_fraction=0.002):
+    deadline = time.monotonic() + timeout_s
+    frac = 0.0
+    while time.monotonic() < deadline:
+        frac = changed_fraction(before, canvas_pixels(locator))
+        if frac >= min_fraction:
+            return frac
+        time.sleep(0.4)
+    return frac
+
+
+def explorer_output(page, control_text):
+    """The output area holding the explorer whose controls include ``control_text``."""
+    out = page.locator(".jp-OutputArea-output").filter(
+        has=page.locator(".jupyter-matplotlib")).filter(has_text=control_text).first
+    out.wait_for(timeout=60_000)
+    return out
+
+
+def test_nbgrader_extension_present(page, lab_server, artifacts):
+    base, token, _ = lab_server
+    page.goto(f"{base}/lab/tree/q5_phong.ipynb?token={token}&reset")
+    page.wait_for_selector(".jp-NotebookPanel .jp-Notebook .jp-Cell")
+    validate = page.locator(".jp-NotebookPanel-toolbar", has_text="Validate")
+    validate.first.wait_for(timeout=30_000)
+    assert page.locator(".lm-MenuBar-itemLabel", has_text="Nbgrader").count() == 1
+    page.screenshot(path=str(artifacts / "nbgrader-extension.png"))
+
+
+def test_spline_explorer_end_rule_changes_figure(page, lab_server, artifacts):
+    base, token, _ = lab_server
+    open_and_run_all(page, base, token, "q4_splines.ipynb", artifacts)
+    out = explorer_output(page, "end rule")
+    canvas = out.locator(".jupyter-matplotlib-canvas-div").first
+    before = canvas_pixels(canvas)
+    out.screenshot(path=str(artifacts / "q4-explorer-before.png"))
+    # switch the spline kind and the end rule: the curve and its end point must move
+    out.locator("button", has_text="B-spline").first.click()
+    out.locator("button", has_text="d = 2c").first.click()
+    frac = wait_for_change(canvas, before)
+    out.screenshot(path=str(artifacts / "q4-explorer-after.png"))
+    assert frac >= 0.002, f"the spline figure did not change after moving a control ({frac:.4f})"
+
+
+def test_phong_explorer_controls_change_figure(page, lab_server, artifacts):
+    base, token, _ = lab_server
+    open_and_run_all(page, base, token, "q5_phong.ipynb", artifacts)
+    out = explorer_output(page, "ka (ambient)")
+    canvas = out.locator(".jupyter-matplotlib-canvas-div").first
+    before = canvas_pixels(canvas)
+    out.screenshot(path=str(artifacts / "q5-explorer-before.png"))
+    # move the light-azimuth slider with the keyboard, as a user would
+    slider = out.locator(".widget-slider", has_text="light azimuth").first
+    handle = slider.locator(".noUi-handle, .ui-slider-handle, [role='slider']").first
+    handle.focus()
+    for _ in range(30):
+        handle.press("ArrowRight")
+    frac = wait_for_change(canvas, before)
+    out.screenshot(path=str(artifacts / "q5-explorer-slider.png"))
+    assert frac >= 0.002, f"the sphere did not change after moving the light ({frac:.4f})"
+    # the exam's worked example is one click away and shows the exam's numbers
+    before = canvas_pixels(canvas)
+    out.locator("button", has_text="Exam Q5(b)").first.click()
+    wait_for_change(canvas, before)
+    page.wait_for_function(
+        "() => document.body.innerText.includes('0.0931')", timeout=20_000)
+    out.screenshot(path=str(artifacts / "q5-explorer-exam.png"))

@@ -1,0 +1,65 @@
+"""Fixtures shared by every test area (areas add their own ``tests/<area>/conftest.py``).
+
+- ``MPLBACKEND=Agg`` for this process and every kernel or subprocess it starts;
+- ``repo_root``: the repository root;
+- ``source_notebooks``: the committed ``notebooks/q*.ipynb`` (skips when none exist yet);
+- ``course``: a session-scoped nbgrader course (``autograder.course.prepare_course``) in a
+  temporary directory, assignment ``tripos2006`` released and registered in its gradebook.
+  Each xdist worker gets its own; tests that write into it (autograde) use one xdist group.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+os.environ["MPLBACKEND"] = "Agg"
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="session")
+def repo_root() -> Path:
+    return REPO_ROOT
+
+
+@pytest.fixture(scope="session")
+def source_notebooks() -> list[Path]:
+    from autograder.course import source_notebooks as find
+
+    notebooks = find()
+    if not notebooks:
+        pytest.skip("no notebooks/q*.ipynb yet")
+    return notebooks
+
+
+@pytest.fixture(scope="session")
+def course(tmp_path_factory, source_notebooks):
+    """A prepared nbgrader course root (``autograder.course.CourseDir``) for this session."""
+    from autograder.course import prepare_course
+
+    return prepare_course(tmp_path_factory.mktemp("course"), notebooks=source_notebooks)
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(config, items):
+    """Keep ``@pytest.mark.xdist_group`` working under ``pytest -n 2 --dist loadgroup``.
+
+    pytest-xdist groups tests by appending ``@<group>`` to each item's node id (it assigns
+    ``item._nodeid``); pytest 9 keeps node ids in a structured ``item._id`` instead, so that
+    assignment is lost and grouped tests are scattered over workers (tests sharing a server or
+    a course folder would then each build their own). Re-apply the suffix where it is missing.
+    """
+    if not getattr(config.option, "loadgroup", False):
+        return
+    try:
+        from _pytest.nodeid import NodeId
+    except ImportError:  # pytest < 9: xdist's own suffix works
+        return
+    for item in items:
+        names = sorted({str(m.args[0] if m.args else m.kwargs.get("name", "default"))
+                        for m in item.iter_markers("xdist_group")})
+        if names and "@" not in item.nodeid and hasattr(item, "_id"):
+            item._id = NodeId.parse(f"{item.nodeid}@{'_'.join(names)}")

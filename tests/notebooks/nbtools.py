@@ -1,0 +1,103 @@
+"""Helpers for the notebook tests: execute with nbclient, read nbgrader cell metadata."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import nbformat
+from nbclient import NotebookClient
+
+#: Per-cell timeout (s) when the tests execute a notebook (nbgrader's own is set in course.py).
+CELL_TIMEOUT = 120
+
+
+def read(path: Path) -> nbformat.NotebookNode:
+    return nbformat.read(str(path), as_version=4)
+
+
+def execute(path: Path, cwd: Path, allow_errors: bool = False, timeout: int = CELL_TIMEOUT):
+    """Run ``path`` top to bottom in a fresh ``python3`` kernel with working directory ``cwd``.
+
+    With ``allow_errors=False`` the first failing cell raises ``nbclient`` 's
+    ``CellExecutionError`` (its message names the cell and shows the traceback).
+    """
+    nb = read(path)
+    client = NotebookClient(
+        nb,
+        timeout=timeout,
+        kernel_name="python3",
+        allow_errors=allow_errors,
+        resources={"metadata": {"path": str(cwd)}},
+    )
+    client.execute()
+    return nb
+
+
+def nbgrader_meta(cell) -> dict:
+    return cell.get("metadata", {}).get("nbgrader", {}) or {}
+
+
+@dataclass(frozen=True)
+class CellError:
+    index: int
+    grade_id: str | None
+    ename: str
+    evalue: str
+
+    def __str__(self) -> str:
+        where = f"cell {self.index}" + (f" ({self.grade_id})" if self.grade_id else "")
+        return f"{where}: {self.ename}: {self.evalue[:200]}"
+
+
+def errors(nb) -> list[CellError]:
+    """Every error output of an executed notebook."""
+    found = []
+    for i, cell in enumerate(nb.cells):
+        if cell.cell_type != "code":
+            continue
+        for out in cell.get("outputs", []):
+            if out.get("output_type") == "error":
+                found.append(CellError(i, nbgrader_meta(cell).get("grade_id"),
+                                       out.get("ename", ""), out.get("evalue", "")))
+    return found
+
+
+def graded_items(nb) -> dict[str, str]:
+    """``{name: kind}`` of the auto-graded items of a notebook.
+
+    An item is a code solution cell whose grade_id ``name`` has a graded test cell
+    ``test_<name>``; its kind is ``"function"`` when the cell defines ``def name(`` and
+    ``"choice"`` otherwise.
+    """
+    cells = {nbgrader_meta(c).get("grade_id"): c for c in nb.cells if nbgrader_meta(c)}
+    items = {}
+    for gid, cell in cells.items():
+        meta = nbgrader_meta(cell)
+        if cell.cell_type != "code" or not meta.get("solution"):
+            continue
+        test = cells.get(f"test_{gid}")
+        if test is None or not nbgrader_meta(test).get("grade"):
+            continue
+        items[gid] = "function" if re.search(rf"^\s*def {re.escape(gid)}\(", cell.source, re.M) \
+            else "choice"
+    return items
+
+
+def autograded_points(nb) -> dict[str, float]:
+    """``{grade_id: points}`` of the auto-graded (code) test cells."""
+    return {
+        nbgrader_meta(c)["grade_id"]: float(nbgrader_meta(c).get("points", 0))
+        for c in nb.cells
+        if c.cell_type == "code" and nbgrader_meta(c).get("grade")
+    }
+
+
+def all_points(nb) -> dict[str, float]:
+    """``{grade_id: points}`` of every graded cell, auto-graded and manually graded."""
+    return {
+        nbgrader_meta(c)["grade_id"]: float(nbgrader_meta(c).get("points", 0))
+        for c in nb.cells
+        if nbgrader_meta(c).get("grade")
+    }

@@ -1,0 +1,180 @@
+"""The Q3 case explorer and figures: drive the controls from Python and check the drawn
+triangles against the geometry of the cube (vertices at the fraction iso along crossed edges)."""
+
+from __future__ import annotations
+
+import time
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+from course_lib import marching_cubes as mc
+from course_lib import mesh
+from course_lib.plots import marching_cubes as plots
+from course_lib.widgets.marching_cubes import CaseExplorer, case_explorer
+
+CORNER_XYZ = np.array([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0),
+                       (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)], float)
+
+
+@pytest.fixture
+def ex():
+    e = case_explorer(1)
+    yield e
+    plt.close(e.fig)
+
+
+def drawn(e):
+    """The triangles held by the figure's Poly3DCollection, shape (t, 3, 3)."""
+    faces = e.art["surface"]._faces
+    return np.asarray(faces, float).reshape(-1, 3, 3)
+
+
+def expected_points(index, iso):
+    """Every crossed edge's vertex: iso of the way from the inside corner to the outside one."""
+    pts = []
+    for a in range(8):
+        for b in range(a + 1, 8):
+            if np.sum(np.abs(CORNER_XYZ[a] - CORNER_XYZ[b])) != 1:
+                continue                                          # not a cube edge
+            ia, ib = (index >> a) & 1, (index >> b) & 1
+            if ia != ib:
+                p_in, p_out = (CORNER_XYZ[a], CORNER_XYZ[b]) if ia else (CORNER_XYZ[b], CORNER_XYZ[a])
+                pts.append(p_in + iso * (p_out - p_in))
+    return np.unique(np.round(pts, 9), axis=0).reshape(-1, 3)
+
+
+def test_case_one_single_triangle_moves_with_iso(ex):
+    assert drawn(ex).shape == (1, 3, 3)
+    np.testing.assert_allclose(np.sort(drawn(ex)[0], axis=0), np.sort(0.5 * np.eye(3), axis=0))
+    ex.iso.value = 0.25
+    got = drawn(ex)[0]
+    np.testing.assert_allclose(sorted(map(tuple, got)), sorted(map(tuple, 0.25 * np.eye(3))))
+    # the triangle faces away from the inside corner (the origin): normal along +(1, 1, 1)
+    n = np.cross(got[1] - got[0], got[2] - got[0])
+    assert np.all(n > 0)
+
+
+@pytest.mark.parametrize("index", [3, 5, 26, 65, 135, 165, 200, 254])
+def test_vertices_follow_interpolation(ex, index):
+    ex.index.value = index
+    for iso in (0.3, 0.7):
+        ex.iso.value = iso
+        tris = drawn(ex)
+        assert len(tris) == mc.N_TRIANGLES[index]
+        got = np.unique(np.round(tris.reshape(-1, 3), 9), axis=0)
+        np.testing.assert_allclose(got, expected_points(index, iso), atol=1e-9)
+
+
+def test_three_controls_stay_in_step(ex):
+    ex.case.value = 13
+    assert ex.index.value == mc.BASE_CASES[13].index
+    assert [b.value for b in ex.corners] == [bool((165 >> c) & 1) for c in range(8)]
+    ex.corners[1].value = True                        # toggle corner 1 on
+    assert ex.index.value == 165 | 2
+    assert ex.case.value == mc.case_of(167)
+    ex.index.value = 0
+    assert not any(b.value for b in ex.corners) and len(drawn(ex)) == 0
+    assert ex.case.value == 0
+
+
+def test_corner_markers_show_inside(ex):
+    ex.index.value = 0b10000001                       # corners 0 and 7
+    colours = [line.get_markerfacecolor() for line in ex.art["corners"]]
+    inside = [c for c, col in enumerate(colours) if col != "white"]
+    assert inside == [0, 7]
+
+
+def test_alternative_triangulation_only_for_ambiguous(ex):
+    ex.case.value = 3                                 # two corners on a face diagonal
+    apart = drawn(ex).copy()
+    assert not ex.alternative.disabled
+    ex.alternative.value = True
+    joined = drawn(ex)
+    # apart: two separate corner triangles; joined: a band through the cell (one piece)
+    assert len(apart) == 2 and len(joined) == 4
+    assert _components(apart) == 2 and _components(joined) == 1
+    ex.case.value = 2                                 # not ambiguous: switch disabled
+    assert ex.alternative.disabled
+    assert len(drawn(ex)) == mc.N_TRIANGLES[mc.BASE_CASES[2].index]
+
+
+def _components(tris):
+    pts, inv = np.unique(np.round(tris.reshape(-1, 3), 9), axis=0, return_inverse=True)
+    faces = inv.reshape(-1, 3)
+    parent = list(range(len(pts)))
+
+    def find(i):
+        while parent[i] != i:
+            i = parent[i]
+        return i
+
+    for a, b, c in faces:
+        parent[find(b)] = find(a)
+        parent[find(c)] = find(a)
+    return len({find(i) for i in range(len(pts))})
+
+
+def test_update_is_fast(ex):
+    t0 = time.perf_counter()
+    for k in range(40):
+        ex.index.value = (37 * k) % 256
+    assert (time.perf_counter() - t0) / 40 < 0.05
+
+
+def test_bad_arguments():
+    with pytest.raises(ValueError):
+        CaseExplorer(index=300)
+    with pytest.raises(ValueError):
+        CaseExplorer(iso=1.0)
+
+
+def test_widget_layout(ex):
+    box = ex.widget
+    assert box is ex.widget and len(box.children) == 2
+
+
+# --------------------------------------------------------------------------------------------
+# figures
+
+
+def test_base_cases_figure():
+    fig, arts = plots.plot_base_cases()
+    counts = [len(np.asarray(a["surface"]._faces)) for a in arts]
+    assert counts == [0, 1, 2, 2, 2, 3, 3, 3, 2, 4, 4, 4, 4, 4, 4]   # Lorensen's figure
+    plt.close(fig)
+
+
+def test_hole_figure_outlines_the_hole():
+    art = plots.plot_hole()
+    segs = np.asarray(art["hole"]._segments3d, float)        # the red outline, (4, 2, 3)
+    assert segs.shape == (4, 2, 3)
+    np.testing.assert_allclose(segs[:, :, 0], 2.0)          # in the shared face x = 2
+    # the outline is a closed loop: every end point is used by exactly two segments
+    _, counts = np.unique(np.round(segs.reshape(-1, 3), 9), axis=0, return_counts=True)
+    assert np.all(counts == 2)
+    plt.close("all")
+
+
+def test_prism_figure_title_is_equation_4():
+    art = plots.plot_projected_prism(a=(0, 0, 2), b=(1, 0, 2), c=(0, 1, 2))
+    title = art["triangle"].axes.get_title()
+    assert "A = 0.500" in title and "l = 2.000" in title and "V = A l = 1.000" in title
+    plt.close("all")
+
+
+def test_other_figures_draw():
+    ax = plots.plot_cube_numbering()
+    assert len(ax["corner_labels"]) == 8 and len(ax["edge_labels"]) == 12
+    lines = plots.plot_ambiguous_face()
+    assert len(lines) == 4
+    art = plots.plot_sphere_mesh(n=10, radius=3.3)
+    assert mesh.is_closed_consistent(art["faces"])
+    _fig, arts = plots.plot_ambiguous_cases()
+    assert len(arts) == 12
+    plt.close("all")
