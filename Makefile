@@ -7,7 +7,6 @@ BIN    := $(CURDIR)/$(VENV)/bin
 STAMP  := $(VENV)/.installed
 # nbgrader shells out to `alembic`: the venv's bin/ must be on PATH for anything that runs it.
 export PATH := $(BIN):$(PATH)
-export MPLBACKEND ?= Agg
 PORT   ?= 8888
 
 .PHONY: lab instructor test test-fast bench browser-deps clean

@@ -17,6 +17,7 @@ virtual environment's ``bin/`` first on ``PATH`` (:func:`nbgrader_env`).
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -98,7 +99,8 @@ def run_nbgrader(
     if db_url:
         cmd.append(f"--CourseDirectory.db_url={db_url}")
     proc = subprocess.run(
-        cmd, cwd=root, env=nbgrader_env(), capture_output=True, text=True, timeout=timeout
+        cmd, cwd=root, env=nbgrader_env(), capture_output=True, text=True, timeout=timeout,
+        check=False,
     )
     if check and (proc.returncode != 0 or "[ERROR]" in proc.stderr):
         tail = "\n".join((proc.stderr or proc.stdout).strip().splitlines()[-40:])
@@ -204,14 +206,43 @@ def prepare_course(
         release_dir=root / "release" / ASSIGNMENT,
         db_url=db_url,
     )
+    root.mkdir(parents=True, exist_ok=True)
+    with _locked(root / ".prepare.lock"):
+        return _prepare(course, notebooks, names)
+
+
+@contextlib.contextmanager
+def _locked(path: Path):
+    """An exclusive lock on ``path`` (two commands preparing one course wait for each other)."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no lock
+        yield
+        return
+    with open(path, "w") as fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
+
+
+def _sqlite_file(db_url: str) -> Path | None:
+    return Path(db_url[len("sqlite:///"):]) if db_url.startswith("sqlite:///") else None
+
+
+def _prepare(course: CourseDir, notebooks: list[Path], names: list[str]) -> CourseDir:
+    root, db_url = course.root, course.db_url
     exchange = root / "exchange"
     config = config_text(db_url, exchange_root=exchange)
     digest = _digest(notebooks, config)
     stamp = root / _STAMP
     expected = sorted(names)
+    db_file = _sqlite_file(db_url)
     if (
         stamp.exists()
         and (root / "nbgrader_config.py").exists()
+        and (db_file is None or db_file.exists())
         and sorted(p.name for p in course.release_dir.glob("*.ipynb")) == expected
         and sorted(p.name for p in course.source_dir.glob("*.ipynb")) == expected
     ):
@@ -221,7 +252,6 @@ def prepare_course(
         except ValueError:
             pass
 
-    root.mkdir(parents=True, exist_ok=True)
     exchange.mkdir(exist_ok=True)
     (root / "nbgrader_config.py").write_text(config)
     course.source_dir.mkdir(parents=True, exist_ok=True)

@@ -29,6 +29,7 @@ import json
 import re
 import shutil
 import sys
+import warnings
 from pathlib import Path
 
 from .grading import ASSIGNMENT, Batch, CellResult, SourceNotebook, Submission
@@ -127,9 +128,13 @@ def sync(batch: Batch, sources: list[SourceNotebook], submitted: Path, out: Path
     by_student: dict[str, list[CellResult]] = {}
     for r in batch.results:
         by_student.setdefault(r.student, []).append(r)
-    with Gradebook(db_url, course_id=COURSE_ID) as gb:
+    with warnings.catch_warnings(), Gradebook(db_url, course_id=COURSE_ID) as gb:
+        # nbgrader's own add_submission triggers harmless SQLAlchemy autoflush warnings
+        warnings.simplefilter("ignore")
+        known = {s.id for s in gb.students}
         for student in batch.students:
-            gb.update_or_create_student(student)
+            if student not in known:
+                gb.add_student(student)
             timestamp = _timestamp(Path(submitted) / student / ASSIGNMENT)
             try:
                 sub = gb.find_submission(ASSIGNMENT, student)
@@ -137,11 +142,11 @@ def sync(batch: Batch, sources: list[SourceNotebook], submitted: Path, out: Path
                     sub.timestamp = timestamp
             except MissingEntry:
                 kwargs = {"timestamp": timestamp} if timestamp is not None else {}
-                gb.add_submission(ASSIGNMENT, student, **kwargs)
+                sub = gb.add_submission(ASSIGNMENT, student, **kwargs)
+            grades = {(nb.name, g.name): g for nb in sub.notebooks for g in nb.grades}
             for r in by_student.get(student, []):
-                try:
-                    grade = gb.find_grade(r.grade_id, r.notebook, ASSIGNMENT, student)
-                except MissingEntry:
+                grade = grades.get((r.notebook, r.grade_id))
+                if grade is None:
                     continue
                 if r.kind == "manual":
                     grade.auto_score = None if r.status == "manual" else 0.0
@@ -149,7 +154,7 @@ def sync(batch: Batch, sources: list[SourceNotebook], submitted: Path, out: Path
                 else:
                     grade.auto_score = float(r.score or 0.0)
                     grade.needs_manual_grade = grade.manual_score is not None
-            gb.db.commit()
+        gb.db.commit()
     for student in batch.students:
         folder = root / "autograded" / student / ASSIGNMENT
         folder.mkdir(parents=True, exist_ok=True)

@@ -429,7 +429,9 @@ class CellResult:
 
 
 def _fmt(x: float) -> str:
-    return f"{round(float(x), 4):g}"
+    """Scores as written to grades.csv: at most six decimals, no trailing zeros."""
+    text = f"{float(x):.6f}".rstrip("0").rstrip(".")
+    return text if text not in ("", "-0") else "0"
 
 
 def case_seed(secret: bytes, student: str, name: str) -> int:
@@ -518,11 +520,14 @@ def summarise(records: list[CaseRecord], points: float) -> tuple[float, str, str
         return 0.0, "reference-used", (
             f"{_clip(ref.reason, 160)}: a graded function must be your own work, so this test "
             "scores 0")
-    score = points * passed / n
+    score = round(points * passed / n, 6)
     if passed == n:
-        return score, "ok", f"all {n} cases passed"
+        return score, "ok", ("correct" if n == 1 and records[0].label == "your answer"
+                             else f"all {n} cases passed")
     statuses = {_VERDICT_STATUS[v] for v in counts}
     status = next(s for s in _SEVERITY if s in statuses)
+    if n == 1 and records[0].label == "your answer":   # a multiple-choice item
+        return score, status, _clip(records[0].reason, 300)
     parts = [f"{c} {_VERDICT_WORDS[v]}" for v, c in sorted(counts.items(), key=lambda x: -x[1])]
     msg = f"{passed} of {n} cases passed ({', '.join(parts)})"
     first = next((r for r in records if r.verdict != "pass" and r.visible), None)
@@ -625,7 +630,8 @@ def grade_batch(submitted: Path, sources: list[SourceNotebook], opts: Options,
             for gid, points in src.manual:
                 present = any(c["grade_id"] == gid for c in sub.cells)
                 results.append(CellResult(
-                    student, src.name, gid, gid, None, points, "manual" if present else "missing",
+                    student, src.name, gid, gid, None if present else 0.0, points,
+                    "manual" if present else "missing",
                     "marked by hand in formgrader" if present else
                     f"the answer cell {gid} is missing from the notebook", kind="manual"))
     results.extend(_run_tasks(tasks, opts))

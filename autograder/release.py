@@ -51,9 +51,9 @@ def leaks(notebook: Path) -> list[str]:
         for marker in FORBIDDEN:
             if marker.lower() in cell.source.lower():
                 problems.append(f"{where}: contains {marker!r}")
-        if cell.cell_type == "markdown" and meta.get("solution") and meta.get("grade"):
-            if cell.source.strip() != TEXT_STUB:
-                problems.append(f"{where}: a manually graded answer cell is not the stub {TEXT_STUB!r}")
+        if (cell.cell_type == "markdown" and meta.get("solution") and meta.get("grade")
+                and cell.source.strip() != TEXT_STUB):
+            problems.append(f"{where}: a manually graded answer cell is not the stub {TEXT_STUB!r}")
         if cell.cell_type == "code" and (cell.get("outputs") or cell.get("execution_count")):
             problems.append(f"{where}: carries outputs")
     return problems

@@ -57,6 +57,7 @@ _MANIFEST_CAP = 8 * 2**20          # bytes of manifest the grader reads before g
 _NPZ_CAP = 256 * 2**20             # bytes of one case's arrays the grader accepts
 _STRING_CAP = 20_000               # characters of a returned string
 _GRACE = 1.0                       # seconds the grader waits beyond the child's own alarm
+_TIMEOUTS_IN_A_ROW = 3             # after this many, a function's remaining cases are not run
 
 
 @dataclass
@@ -129,7 +130,14 @@ _PRELOAD = ("math", "cmath", "fractions", "decimal", "statistics", "itertools", 
             "collections", "collections.abc", "dataclasses", "typing", "warnings", "re", "copy",
             "heapq", "bisect", "operator", "random", "string", "textwrap", "enum", "numbers",
             "contextlib", "traceback", "json", "numpy.linalg", "numpy.fft", "numpy.random",
-            "numpy.polynomial")
+            "numpy.polynomial", "numpy.testing", "unittest", "inspect", "ast", "dis", "pprint",
+            "datetime", "array", "struct", "io", "pathlib", "glob", "csv", "copyreg", "weakref",
+            "types", "time", "calendar", "hashlib", "base64", "itertools", "difflib", "locale",
+            "string", "random", "secrets", "bisect", "queue", "threading", "signal", "os",
+            "collections", "numbers", "decimal", "fractions", "statistics", "operator",
+            "functools", "typing", "warnings", "textwrap", "re", "copy", "abc", "enum",
+            "contextlib", "dataclasses", "heapq", "math", "cmath", "unicodedata", "zlib",
+            "gzip", "zipfile", "tempfile", "shutil", "fnmatch", "sqlite3", "pickle")
 
 
 def protected_dirs() -> list[str]:
@@ -183,8 +191,8 @@ def run_job(job: SandboxJob, limits: Limits, workdir: str, slot: int = 0,
                 i, "not-run",
                 message=f"not run: your code {last} on earlier cases, so the rest were skipped")
     result.outcomes = [outcomes[i] for i in range(n)]
-    result.stdout = _join_capped(stdout_parts, limits.output_bytes)
-    result.stderr = _join_capped(stderr_parts, limits.output_bytes)
+    result.stdout = _join_capped(stdout_parts, limits.output_bytes + 256)
+    result.stderr = _join_capped(stderr_parts, limits.output_bytes + 256)
     result.seconds = time.monotonic() - t0
     return result
 
@@ -433,8 +441,8 @@ def _launch(job: SandboxJob, limits: Limits, workdir: str, slot: int, start: int
                 code = handle.returncode(wait=0.5 if not out["done"] else 0.0)
                 handle.kill()
             out["returncode"] = code
-            out["stdout"] = _read_capped(fout, limits.output_bytes)
-            out["stderr"] = _read_capped(ferr, limits.output_bytes)
+            out["stdout"] = _read_capped(fout, limits.output_bytes + 256)
+            out["stderr"] = _read_capped(ferr, limits.output_bytes + 256)
             if not out["done"] and code not in (None, 0):
                 note = _describe_exit(code)
                 for o in out["outcomes"].values():
@@ -755,6 +763,8 @@ def _child_main(scratch: str, fd: int | None = None,
         fd = int(os.environ.get(MANIFEST_FD_ENV, "-1"))
     if drop is None:
         drop = os.environ.get(DROP_ENV, "")
+    os.environ.pop(MANIFEST_FD_ENV, None)
+    os.environ.pop(DROP_ENV, None)
     monotonic = time.monotonic
     dumps = json.dumps
 
@@ -819,6 +829,8 @@ def _child_main(scratch: str, fd: int | None = None,
             s = str(s) if type(s) is not str else s
             if self._n < cap:
                 write(self._fd, s[: cap - self._n].encode("utf-8", "replace"))
+                if self._n + len(s) >= cap:
+                    write(self._fd, b"\n... [output truncated]\n")
             self._n += len(s)
             return len(s)
 
@@ -844,6 +856,15 @@ def _child_main(scratch: str, fd: int | None = None,
     sys.stdout = Capped(1)
     sys.stderr = Capped(2)
 
+    import importlib
+
+    if drop:  # the interpreter's own files may be unreadable once the uid is dropped
+        for modname in _PRELOAD:
+            try:
+                importlib.import_module(modname)
+            except Exception:  # noqa: BLE001 - a module missing here is missing for all
+                pass
+
     # the instructor's setup cell (trusted code, from the source notebook)
     ns: dict[str, Any] = {"__name__": "__main__", "__builtins__": __builtins__}
     emit({"ev": "cell", "label": "setup"})
@@ -854,8 +875,6 @@ def _child_main(scratch: str, fd: int | None = None,
 
     # the reference modules are loaded (cached in a zygote) so that they can be stubbed: a
     # student who imports one gets the stubs, not an ImportError
-    import importlib
-
     for modname in sorted({m for m, _ in spec["reference_targets"]}):
         try:
             importlib.import_module(modname)
@@ -942,11 +961,6 @@ def _child_main(scratch: str, fd: int | None = None,
 
     hook = _make_audit_hook(scratch, spec["deny_paths"])
     if drop:  # started as root: become the sandbox uid before any student code runs
-        for modname in _PRELOAD:
-            try:
-                importlib.import_module(modname)
-            except ImportError:
-                pass
         uid, gid = (int(x) for x in drop.split(":"))
         os.setgroups([])
         os.setresgid(gid, gid, gid)
@@ -1016,7 +1030,12 @@ def _child_main(scratch: str, fd: int | None = None,
 
     start = int(spec["start"])
     cases = spec["cases"]
+    timeouts_in_a_row = 0
     for i in range(start, len(cases)):
+        if timeouts_in_a_row >= _TIMEOUTS_IN_A_ROW:
+            emit({"ev": "case", "i": i, "kind": "timeout", "seconds": 0.0,
+                  "message": f"not run: the {_TIMEOUTS_IN_A_ROW} cases before it timed out"})
+            continue
         emit({"ev": "start", "i": i})
         state["ref"] = None
         ev: dict[str, Any] = {"ev": "case", "i": i}
@@ -1065,6 +1084,7 @@ def _child_main(scratch: str, fd: int | None = None,
                       "message": f"the result could not be saved ({type(exc).__name__}: "
                                  "is it enormous?)"}
             del value
+        timeouts_in_a_row = timeouts_in_a_row + 1 if ev["kind"] == "timeout" else 0
         try:
             emit(ev)
         except (TypeError, ValueError):
@@ -1127,6 +1147,8 @@ def _make_audit_hook(scratch: str, deny: list[str]):  # pragma: no cover - runs 
         "ctypes.set_errno", "sys.remote_exec", "os.setuid", "os.setgid", "os.setresuid",
         "os.chroot", "_posixsubprocess.fork_exec", "mmap.__new__", "winreg.OpenKey",
         "resource.setrlimit", "resource.prlimit", "signal.pthread_kill",
+        "sqlite3.connect", "sqlite3.connect/handle", "sqlite3.enable_load_extension",
+        "sqlite3.load_extension", "os.add_dll_directory",
     })
     write_events = frozenset({
         "os.remove", "os.rename", "os.mkdir", "os.rmdir", "os.symlink", "os.link",

@@ -171,11 +171,13 @@ def pmt_gain_monte_carlo(delta, n_dynodes, n_events, rng=None, photoelectrons=1)
 def collimator_resolution(d, L, z):
     """Geometric resolution of a parallel hole, ``R = d (L + z) / L`` (Q2(c)).
 
-    The rays that can pass a hole of diameter ``d`` and length ``L`` fill a double cone whose
-    waist is the hole. Its two extreme rays join opposite edges of the entrance and exit faces,
-    cross inside the hole and diverge beyond the entrance face: by similar triangles, at distance
-    ``z`` in front of the face they are ``d (L + z) / L`` apart. A source anywhere inside that
-    width contributes counts to the hole, so it is the width that the camera cannot resolve.
+    Seen from the point of the crystal behind the centre of a hole of diameter ``d`` and length
+    ``L``, the lines through the edges of the hole's mouth form a cone: width ``d`` at the
+    collimator face, a distance ``L`` from its apex, and width ``R`` at the source plane, a
+    further ``z`` away. By similar triangles ``R / d = (L + z) / L``. Sources closer together
+    than ``R`` are seen by the same points of the crystal and cannot be told apart. (The extreme
+    rays that cross the hole from edge to opposite edge reach further, to a patch
+    ``d (L + 2 z) / L`` wide, but from near its rim only a sliver of photons passes.)
 
     Parameters
     ----------

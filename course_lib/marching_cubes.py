@@ -552,17 +552,19 @@ def marching_cubes(volume, iso, spacing=(1.0, 1.0, 1.0)):
 
 def _march(volume, iso, spacing, table, ntri):
     nx, ny, nz = volume.shape
-    inside = volume < iso
-    # case number of every cell: bit c from corner c
+    inside = (volume < iso).view(np.uint8)
+    # case number of every cell: bit c from corner c (uint8 keeps this pass light)
     cell_shape = (nx - 1, ny - 1, nz - 1)
-    index = np.zeros(cell_shape, dtype=np.int64)
+    index = np.zeros(cell_shape, dtype=np.uint8)
     for c, (di, dj, dk) in enumerate(CORNERS):
-        index |= inside[di:di + nx - 1, dj:dj + ny - 1, dk:dk + nz - 1].astype(np.int64) << c
-    cells = np.flatnonzero(ntri[index.ravel()] > 0)
-    counts = ntri[index.ravel()[cells]]
+        index |= inside[di:di + nx - 1, dj:dj + ny - 1, dk:dk + nz - 1] << np.uint8(c)
+    flat = index.ravel()
+    cells = np.flatnonzero((flat != 0) & (flat != 255))               # cells the surface crosses
+    cases = flat[cells].astype(np.int64)
+    counts = ntri[cases]
     cell_rep = np.repeat(cells, counts)
     slot = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-    local = table[index.ravel()[cell_rep], slot]                      # (T, 3) cube edges
+    local = table[np.repeat(cases, counts), slot]                     # (T, 3) cube edges
     ijk = np.stack(np.unravel_index(cell_rep, cell_shape), axis=-1)   # (T, 3)
     # global number of each grid edge: edges along x, then y, then z
     axis_shapes = [tuple(n - (a == ax) for a, n in enumerate(volume.shape)) for ax in range(3)]

@@ -28,7 +28,7 @@ __all__ = [
 ]
 
 
-def triangle_projected_volume(a, b, c, n=(0.0, 0.0, 1.0)):
+def triangle_projected_volume(a, b, c, n):
     """Signed volume of the prism between triangle ``abc`` and its projection along ``n``, Q3(d).
 
     Parameters

@@ -58,7 +58,20 @@ EXAM_Q5B = {
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Dot product along the last axis, broadcasting the leading axes."""
-    return np.einsum("...i,...i->...", *np.broadcast_arrays(a, b))
+    return np.einsum("...i,...i->...", a, b)
+
+
+def _length(v: np.ndarray) -> np.ndarray:
+    """Euclidean length along the last axis."""
+    return np.sqrt(np.einsum("...i,...i->...", v, v))
+
+
+def _unit(v: np.ndarray, name: str) -> np.ndarray:
+    """``v`` normalised along its last axis; ``ValueError`` for a zero-length vector."""
+    m = _length(v)
+    if np.any(m == 0):
+        raise ValueError(f"{name} contains a zero-length vector, which has no direction")
+    return v / m[..., None]
 
 
 def normalize(v) -> np.ndarray:
@@ -195,27 +208,34 @@ def phong_terms(L, N, V, n, model: str = "phong"):
     -----
     Q5(a) and Q5(c). Used by :func:`phong`, :func:`blinn_phong` and the sphere renderer.
     """
-    L = unit(as_vectors(L, 3, "L"), "L")
-    N = unit(as_vectors(N, 3, "N"), "N")
-    V = unit(as_vectors(V, 3, "V"), "V")
+    L = _unit(as_vectors(L, 3, "L"), "L")
+    N = as_vectors(N, 3, "N")
+    V = _unit(as_vectors(V, 3, "V"), "V")
     n = as_scalar(n, "n")
     if n <= 0:
         raise ValueError(f"n (the specular exponent) must be positive, got {n}")
-    LN = _dot(L, N)
+    # Only dot products are needed, so N is never normalised as a vector (cheaper for large
+    # batches): with unit L, V and |N| = m, L.N = (L.N_raw)/m and N.V = (N_raw.V)/m.
+    m = _length(N)
+    if np.any(m == 0):
+        raise ValueError("N contains a zero-length vector, which has no direction")
+    LN = _dot(L, N) / m
+    NV = _dot(N, V) / m
     if model == "phong":
-        R = 2.0 * LN[..., None] * N - L
-        c = _dot(R, V)
+        # R.V = (2 (L.N) N - L).V = 2 (L.N)(N.V) - L.V
+        c = 2.0 * LN * NV - _dot(L, V)
     elif model == "blinn":
-        s = L + V
-        norm = np.linalg.norm(s, axis=-1)
+        # N.H = N.(L + V) / |L + V|
+        norm = _length(L + V)
         if np.any(norm < 1e-12):
             raise ValueError("L and V point in opposite directions: the half-way vector "
                              "is undefined")
-        c = _dot(N, s) / norm
+        c = (LN + NV) / norm
     else:
         raise ValueError(f"model must be 'phong' or 'blinn', got {model!r}")
     lit = LN > 0
-    spec = np.where(lit, np.maximum(c, 0.0) ** n, 0.0)
+    spec = np.where(lit, np.maximum(c, 0.0), 0.0) ** n
+    spec = np.where(lit, spec, 0.0)
     return np.maximum(LN, 0.0), spec
 
 
@@ -385,8 +405,9 @@ def render_sphere(colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128, model: s
     image : ndarray, shape (size, size, 3)
         Linear RGB intensities (not clipped: values above 1 mean an over-exposed highlight).
     highlight : tuple of two floats, or None
-        ``(row, col)`` of the pixel where the specular term is largest, ``None`` when no lit
-        point of the visible hemisphere has a specular term.
+        ``(row, col)`` of the pixel where the specular factor (``max(R.V, 0)^n`` or
+        ``max(N.H, 0)^n``, before scaling by ``Ip ks``) is largest; ``None`` when it is zero at
+        every visible pixel (no lit point reflects towards the viewer).
 
     Notes
     -----

@@ -53,7 +53,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import as_float_array, as_positive, as_scalar, as_int
+from ._validate import as_float_array, as_int, as_positive, as_scalar
 
 #: Speed of sound every clinical scanner assumes in soft tissue (m/s).
 C_ASSUMED = 1540.0
@@ -337,7 +337,10 @@ def exam_phantom(fat_thickness=40.0, liver_thickness=40.0, water_thickness=40.0,
             "bath": "water"}
 
 
-def _check_blocks(blocks, floor_depth, width):
+def _check_blocks(blocks, floor_depth, width, bath="water"):
+    """Validate a phantom; returns ``(blocks as tuples of floats, floor_depth, width)``."""
+    if bath not in MATERIALS:
+        raise ValueError(f"unknown bath material {bath!r}; known: {sorted(MATERIALS)}")
     floor = as_scalar(floor_depth, "floor_depth")
     w = as_scalar(width, "width")
     if floor <= 0 or w <= 0:
@@ -350,18 +353,24 @@ def _check_blocks(blocks, floor_depth, width):
         if name not in MATERIALS:
             raise ValueError(f"blocks[{i}]: unknown material {name!r}; known: {sorted(MATERIALS)}")
         x0, x1, z0, z1 = (as_scalar(v, f"blocks[{i}]") for v in block[1:])
-        if not (x1 > x0 and z1 > z0 and z0 >= 0 and z1 < floor):
+        if not (x1 > x0 and z1 > z0 >= 0 and z1 < floor):
             raise ValueError(f"blocks[{i}] must have x0 < x1 and 0 <= z0 < z1 < floor_depth")
         out.append((name, x0, x1, z0, z1))
+    for i, a in enumerate(out):
+        for j, b in enumerate(out[:i]):
+            if a[1] < b[2] and b[1] < a[2] and a[3] < b[4] and b[3] < a[4]:
+                raise ValueError(f"blocks[{j}] and blocks[{i}] overlap")
     return out, floor, w
 
 
 def _column_layers(blocks, floor_depth, x, bath, speeds):
     """Per column: padded layer stacks (tops, thicknesses, material index) down to the floor.
 
-    Returns ``names`` (material list), ``top`` (nx, L), ``thick`` (nx, L), ``mat`` (nx, L) and
-    ``wall`` (nx, L) - the extra reflection at the top of each layer from a container wall. The
-    last layer of every column is the bath floor (acrylic, thickness 0 to mark the interface).
+    Returns ``names`` (material list, sorted), ``props`` (their :func:`material_properties`),
+    ``top``, ``thick``, ``mat`` (material index) and ``wall`` (extra reflection at the top of
+    each layer from a container wall), all (nx, L), and ``k`` (nx,), the slot of the floor in
+    each column. Slot 0 is the bath next to the probe; the floor slot and the padding after it
+    have zero thickness and acrylic as material.
     """
     names = sorted(MATERIALS)
     index = {n: i for i, n in enumerate(names)}
@@ -432,14 +441,14 @@ def phantom_interfaces(blocks, floor_depth, width, x=None, *, bath="water", spee
     Q1(c): "true vs displayed" geometry. The last non-NaN entry of a row is the bath floor, so
     ``np.nanmax(displayed_depth, axis=1)`` is the displayed floor per column.
     """
-    blocks, floor, w = _check_blocks(blocks, floor_depth, width)
+    blocks, floor, w = _check_blocks(blocks, floor_depth, width, bath)
     ca = as_scalar(c_assumed, "c_assumed")
     if ca <= 0:
         raise ValueError(f"c_assumed must be positive, got {ca}")
     if x is None:
         x = (np.arange(as_int(nx, "nx", minimum=1)) + 0.5) * w / nx
     x = as_float_array(x, "x").ravel()
-    names, props, top, thick, mat, wall, k = _column_layers(blocks, floor, x, bath, speeds)
+    _names, props, top, thick, mat, _wall, k = _column_layers(blocks, floor, x, bath, speeds)
     speed = np.array([p["c"] for p in props])[mat]
     disp_bottom = np.cumsum(thick * ca / speed, axis=1)
     disp_top = disp_bottom - thick * ca / speed
@@ -541,7 +550,7 @@ def simulate_bscan(blocks, floor_depth, width, *, bath="water", speeds=None, fre
     >>> image.shape[1], extent[:2]
     (64, (0.0, 85.0))
     """
-    blocks, floor, w = _check_blocks(blocks, floor_depth, width)
+    blocks, floor, w = _check_blocks(blocks, floor_depth, width, bath)
     f = as_scalar(freq_mhz, "freq_mhz")
     ca = as_scalar(c_assumed, "c_assumed")
     if f <= 0 or ca <= 0:
@@ -554,7 +563,7 @@ def simulate_bscan(blocks, floor_depth, width, *, bath="water", speeds=None, fre
 
     dx = w / nx
     x = (np.arange(nx) + 0.5) * dx
-    names, props, top, thick, mat, wall, k = _column_layers(blocks, floor, x, bath, speeds)
+    _names, props, top, thick, mat, wall, _k = _column_layers(blocks, floor, x, bath, speeds)
     c = np.array([p["c"] for p in props])[mat]
     alpha = np.array([p["alpha"] for p in props])[mat]
     imp = np.array([p["Z"] for p in props])[mat]
@@ -630,11 +639,17 @@ def simulate_bscan(blocks, floor_depth, width, *, bath="water", speeds=None, fre
           + 1j * np.bincount(flat, weights=vals.imag, minlength=size))
     rf = rf.reshape(nx, nd + 1)[:, :nd]
 
+    # axial pulse by FFT, lateral beam by shifted sums (single precision is ample here)
+    rf = rf.astype(np.complex64)
     n_fft = 1 << int(np.ceil(np.log2(nd + g.size)))
-    rf = np.fft.ifft(np.fft.fft(rf, n_fft, axis=1) * np.fft.fft(g, n_fft)[None, :], axis=1)
-    rf = rf[:, half:half + nd]
-    padded = np.pad(rf, ((hx, hx), (0, 0)))
-    rf = sum(wx[i] * padded[i:i + nx] for i in range(wx.size))
+    kernel = np.fft.fft(g.astype(np.float32), n_fft)[None, :]
+    rf = np.fft.ifft(np.fft.fft(rf, n_fft, axis=1) * kernel, axis=1)[:, half:half + nd]
+    wx = [float(v) for v in wx]  # Python floats keep complex64
+    beam = wx[hx] * rf
+    for o in range(1, hx + 1):
+        beam[o:] += wx[hx + o] * rf[:-o]
+        beam[:-o] += wx[hx - o] * rf[o:]
+    rf = beam
     env = np.abs(rf).T  # (nd, nx); a planar perfect reflector at the probe gives 1
 
     level = 20.0 * np.log10(np.maximum(env, 1e-12)) + gain_db

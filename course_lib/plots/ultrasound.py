@@ -177,7 +177,7 @@ def plot_aline(depth, envelope, x, columns, ax=None, labels=None, phantom=None, 
         (line,) = ax.plot(depth, level, color=colours[i % 4], linewidth=0.8, label=label)
         lines.append(line)
         if phantom is not None:
-            _, true, shown = us.phantom_interfaces(phantom["blocks"], phantom["floor_depth"],
+            _, _true, shown = us.phantom_interfaces(phantom["blocks"], phantom["floor_depth"],
                                                    phantom["width"], x=[x[j]],
                                                    bath=phantom["bath"], speeds=speeds,
                                                    c_assumed=c_assumed)
@@ -202,7 +202,7 @@ def phantom_and_bscan(phantom=None, speeds=None, show_displayed=False, **simulat
     :func:`course_lib.ultrasound.simulate_bscan`.
     """
     phantom = us.exam_phantom() if phantom is None else phantom
-    image, x, depth, extent = us.simulate_bscan(**phantom, speeds=speeds, **simulate_kwargs)
+    image, _x, _depth, extent = us.simulate_bscan(**phantom, speeds=speeds, **simulate_kwargs)
     fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(11, 4.8), sharey=False)
     fig.set_layout_engine("constrained")
     a = plot_phantom(phantom, ax0, speeds)

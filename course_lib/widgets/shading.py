@@ -7,7 +7,8 @@ and the viewer (azimuth and elevation); each highlight's rendered peak is ringed
 analytic position (the point whose normal is ``H``) crossed. A probe point (the exam's normal
 ``N = (0, 1/2, sqrt(3)/2)`` by default) is marked with a square and its RGB intensity printed
 under both models. The button "Exam Q5(b)" loads the worked example, whose Phong intensity is
-``(0.0931, 0.0931, 0.699)``.
+``(0.0931, 0.0931, 0.699)`` (with the exam's exact directions until a direction slider is moved,
+since a slider can show the light's elevation of 35.26 degrees only to its step).
 
 Every change calls :meth:`PhongExplorer.update`, which re-renders into the existing images with
 ``set_data`` (two 128 x 128 renders, a few milliseconds) and moves the markers.
@@ -132,6 +133,7 @@ class PhongExplorer:
         self._layout = None
         self._output = None
         self._holding = False
+        self._exam_mode = False
 
         with plt.ioff():
             self.fig, axes = new_figure(2, size=3.4)
@@ -158,13 +160,23 @@ class PhongExplorer:
                 self.light_elevation, self.view_azimuth, self.view_elevation)
 
     @property
+    def directions(self):
+        """The four direction sliders, by their names in :data:`EXAM_SETTINGS`."""
+        return {"light_azimuth": self.light_azimuth, "light_elevation": self.light_elevation,
+                "view_azimuth": self.view_azimuth, "view_elevation": self.view_elevation}
+
+    @property
     def L(self) -> np.ndarray:
-        """Unit vector towards the light."""
+        """Unit vector towards the light (the exam's exactly, after "Exam Q5(b)")."""
+        if self._exam_mode:
+            return shading.normalize(shading.EXAM_Q5B["L"])
         return direction(self.light_azimuth.value, self.light_elevation.value)
 
     @property
     def V(self) -> np.ndarray:
-        """Unit vector towards the viewer."""
+        """Unit vector towards the viewer (the exam's exactly, after "Exam Q5(b)")."""
+        if self._exam_mode:
+            return shading.normalize(shading.EXAM_Q5B["V"])
         return direction(self.view_azimuth.value, self.view_elevation.value)
 
     def _args(self):
@@ -212,15 +224,28 @@ class PhongExplorer:
             H = "undefined (V = −L)"
         return (
             "<div style='font-family: monospace; font-size: 12px; line-height: 1.5'>"
-            f"L = {vec(L)}<br>V = {vec(V)}<br>H = {H}<br>"
+            f"L = {vec(L)}<br>V = {vec(V)}"
+            f"{' (the exam&#39;s exact directions)' if self._exam_mode else ''}<br>H = {H}<br>"
             f"probe N = {vec(self.probe)} (yellow square)<br>"
             f"<b>Phong</b> I = {rgb(self.probe_values['phong'])}<br>"
             f"<b>Blinn-Phong</b> I = {rgb(self.probe_values['blinn'])}</div>"
         )
 
     def load_exam(self, *_):
-        """Set the controls to the Q5(b) example (one update at the end)."""
-        self.set(**EXAM_SETTINGS)
+        """Set the controls to the Q5(b) example (one update at the end).
+
+        The sliders can only show the exam's light elevation, asin(1/sqrt 3) = 35.26 degrees,
+        to their step (the browser rounds it), so until a direction slider is moved by more
+        than half a step the explorer uses the exam's exact ``L`` and ``V``.
+        """
+        self._holding = True
+        try:
+            for name, value in EXAM_SETTINGS.items():
+                getattr(self, name).value = value
+        finally:
+            self._holding = False
+        self._exam_mode = True
+        self.update()
 
     def set(self, **values):
         """Set several controls at once (``ka=0.3, light_azimuth=10, colour="#ff0000"``, ...)
@@ -229,13 +254,24 @@ class PhongExplorer:
         try:
             for name, value in values.items():
                 getattr(self, name).value = value
+                self._leave_exam_if_moved(name)
         finally:
             self._holding = False
         self.update()
 
+    def _leave_exam_if_moved(self, name):
+        slider = self.directions.get(name)
+        if (self._exam_mode and slider is not None
+                and abs(slider.value - EXAM_SETTINGS[name]) > 0.5 * slider.step + 1e-9):
+            self._exam_mode = False
+
     def _on_change(self, change):
-        if not self._holding:
-            self.update()
+        if self._holding:
+            return
+        for name, slider in self.directions.items():
+            if change["owner"] is slider:
+                self._leave_exam_if_moved(name)
+        self.update()
 
     # ---------------------------------------------------------------------------------------
     # display

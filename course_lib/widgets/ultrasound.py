@@ -122,7 +122,7 @@ class BScanExplorer:
 
     @staticmethod
     def _liver_x(phantom):
-        b = [b for b in phantom["blocks"] if b[0] == "liver"][0]
+        b = next(b for b in phantom["blocks"] if b[0] == "liver")
         return (b[1] + b[2]) / 2
 
     @staticmethod

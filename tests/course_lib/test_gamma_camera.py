@@ -417,6 +417,11 @@ def test_figures_draw_what_the_maths_says():
     art = pg.plot_hole_rings(holes, D_HOLE, L_D, Z_D, R_FACE, colour_by="transmission")
     np.testing.assert_allclose(art["holes"].get_array(),
                                gc.transmission_profile(np.hypot(*holes.T), 1.0, 40.0, 1000.0)[0])
+    art = pg.plot_hole_lens(10.0, D_HOLE, L_D, Z_D)
+    s = Z_D / (Z_D + L_D)
+    assert art["exit"].center == pytest.approx((10.0 * s, 0.0))
+    assert art["exit"].radius == pytest.approx(0.5 * s)
+    assert art["lens"].get_clip_path() is not None
     art = pg.plot_pmt_cascade(3.0, 6)
     assert len(art["dynodes"]) == 6
     art = pg.plot_transmission_profile(D_HOLE, L_D, Z_D)

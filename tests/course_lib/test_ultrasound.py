@@ -254,7 +254,7 @@ def _columns(x, x0, x1, margin=1.5):
 def test_phantom_interfaces_by_hand():
     ph = us.exam_phantom()
     x = np.array([5.0, 17.5, 42.5, 67.5])  # gap, fat, liver, water
-    xs, true, shown = us.phantom_interfaces(ph["blocks"], ph["floor_depth"], ph["width"], x=x)
+    _xs, true, shown = us.phantom_interfaces(ph["blocks"], ph["floor_depth"], ph["width"], x=x)
     np.testing.assert_allclose(true[0, :1], [60.0])
     assert np.all(np.isnan(true[0, 1:]))
     np.testing.assert_allclose(true[1:], [[10, 50, 60]] * 3)
@@ -294,7 +294,7 @@ def _floor_echo(env, depth, cols, lo, hi):
 
 
 def test_floor_displaced_under_blocks_measured_from_image(scan):
-    ph, image, x, depth, extent, env = scan
+    _ph, _image, x, depth, _extent, env = scan
     gap_cols = np.concatenate([_columns(x, 0, 10), _columns(x, 75, 85)])
     d_gap, _ = _floor_echo(env, depth, gap_cols, 55, 68)
     d_liver, _ = _floor_echo(env, depth, _columns(x, 35, 50), 55, 68)
@@ -307,7 +307,7 @@ def test_floor_displaced_under_blocks_measured_from_image(scan):
 
 
 def test_floor_brighter_under_gaps_by_the_tissue_round_trip_loss(scan):
-    ph, image, x, depth, extent, env = scan
+    _ph, _image, x, depth, _extent, env = scan
     gap_cols = np.concatenate([_columns(x, 0, 10), _columns(x, 75, 85)])
     _, gap = _floor_echo(env, depth, gap_cols, 55, 68)
     _, liver = _floor_echo(env, depth, _columns(x, 35, 50), 55, 68)
@@ -331,7 +331,7 @@ def test_floor_brighter_under_gaps_by_the_tissue_round_trip_loss(scan):
 
 
 def test_block_lengths_measured_from_image(scan):
-    ph, image, x, depth, extent, env = scan
+    ph, _image, x, depth, _extent, env = scan
     measured = {}
     for name, x0, x1, z0, z1 in ph["blocks"]:
         cols = _columns(x, x0, x1)
@@ -394,5 +394,58 @@ def test_phantom_bad_input():
         us.exam_phantom(fat_thickness=-1.0)
     with pytest.raises(ValueError):
         us.exam_phantom(floor_depth=30.0)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="unknown material"):
         us.simulate_bscan((("bone", 0, 1, 1, 2),), 10.0, 5.0)
+    with pytest.raises(ValueError, match="overlap"):
+        us.simulate_bscan((("fat", 0, 2, 1, 3), ("liver", 1, 3, 2, 4)), 10.0, 5.0)
+    with pytest.raises(ValueError, match="bath"):
+        us.phantom_interfaces((), 10.0, 5.0, bath="air")
+
+
+# --------------------------------------------------------------------------------------------
+# figures (course_lib.plots.ultrasound): the artists carry the geometry computed by hand
+
+
+def test_figures_draw_true_and_displayed_geometry():
+    import matplotlib.pyplot as plt
+
+    from course_lib.plots import ultrasound as uplots
+
+    ph = us.exam_phantom()
+    fig, art = uplots.phantom_and_bscan(ph, nx=48, show_displayed=True)
+    try:
+        bscan = art["bscan"]
+        assert len(fig.axes) == 2 and bscan["image"].get_array().shape[1] == 48
+        for line, (_, x0, x1, z0, z1) in zip(bscan["true"], ph["blocks"]):
+            xs, zs = line.get_data()
+            assert (min(xs), max(xs), min(zs), max(zs)) == (x0, x1, z0, z1)
+        water = 10 * C0 / C_WATER
+        fat_shown = np.asarray(bscan["displayed"][0].get_ydata())
+        assert fat_shown.min() == pytest.approx(water)
+        assert fat_shown.max() == pytest.approx(water + 40 * C0 / C_FAT)
+        xs, floor = (np.asarray(a) for a in bscan["displayed"][-1].get_data())
+        under_liver = floor[(xs > 36) & (xs < 49)]
+        np.testing.assert_allclose(under_liver, 2 * water + 40 * C0 / C_LIVER)
+        in_gap = floor[xs < 9]
+        np.testing.assert_allclose(in_gap, 6 * water)
+    finally:
+        plt.close(fig)
+
+
+def test_aline_figure_plots_the_envelope_in_db():
+    import matplotlib.pyplot as plt
+
+    from course_lib.plots import ultrasound as uplots
+
+    ph = us.exam_phantom()
+    _, x, depth, _, env = us.simulate_bscan(**ph, nx=40, seed=9, return_envelope=True)
+    fig, ax = plt.subplots()
+    try:
+        art = uplots.plot_aline(depth, env, x, [42.5], ax, phantom=ph)
+        d, level = art["lines"][0].get_data()
+        np.testing.assert_array_equal(d, depth)
+        j = int(np.argmin(np.abs(x - 42.5)))
+        np.testing.assert_allclose(level, 20 * np.log10(np.maximum(env[:, j], 1e-6)), rtol=1e-6)
+        assert len(art["markers"]) == 4  # three interfaces under the liver + the true floor
+    finally:
+        plt.close(fig)

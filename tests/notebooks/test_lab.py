@@ -95,7 +95,7 @@ def test_lab_views(lab):
     status, page = _get(url)
     assert status == 200
     m = re.search(r'<script id="jupyter-config-data" type="application/json">(.*?)</script>',
-                  page, re.S)
+                  page, re.DOTALL)
     assert m, "no page config in /lab"
     config = json.loads(html.unescape(m.group(1)))
     disabled = set(config.get("disabledExtensions", []))
@@ -114,4 +114,8 @@ def test_lab_views(lab):
         assert not {p for p in disabled if p.startswith("@jupyter/nbgrader")}
         assert (formgrader, course_list) == (200, 200)
         assert not root.endswith("/release")
+        # the formgrader works on this course: it lists the assignment from its gradebook
+        status, body = _get(f"{base}/formgrader/api/assignments?token={token}")
+        assert status == 200
+        assert ASSIGNMENT in {a.get("name") for a in json.loads(body)}
     assert assignments == 200

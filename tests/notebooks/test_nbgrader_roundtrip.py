@@ -11,6 +11,8 @@
 - ``one_wrong`` submits the source notebooks with, in each notebook, one graded function made to
   return a wrong value (a wrapper around the model answer perturbs every value it returns, bad
   input still raises): exactly that function's test cell scores 0, every other cell in full.
+  This submission also drops the ungraded code cells (figures, explorers): the graded cells must
+  not depend on them (the batch grader never runs them), and it keeps the run short.
 
 The course root is shared with the other tests of this worker (one xdist group).
 """
@@ -95,6 +97,13 @@ def choose_wrong_function(nb) -> str:
     return candidates[-1]
 
 
+def strip_ungraded_code(nb):
+    """Drop the code cells without nbgrader metadata (figures, explorers): what the batch grader
+    runs anyway, and the house rule says graded cells must not depend on them."""
+    nb.cells = [c for c in nb.cells if c.cell_type != "code" or nbgrader_meta(c)]
+    return nb
+
+
 def make_wrong(nb, name: str):
     for cell in nb.cells:
         if nbgrader_meta(cell).get("grade_id") == name:
@@ -118,7 +127,8 @@ def graded(course):
         shutil.copyfile(course.release_dir / src.name, course.submitted_dir("untouched") / src.name)
         nb = read(src)
         wrong[src.stem] = choose_wrong_function(nb)
-        nbformat.write(make_wrong(nb, wrong[src.stem]), str(course.submitted_dir("one_wrong") / src.name))
+        nb = strip_ungraded_code(make_wrong(nb, wrong[src.stem]))
+        nbformat.write(nb, str(course.submitted_dir("one_wrong") / src.name))
 
     course.nbgrader(["autograde", ASSIGNMENT, "--force"])
 

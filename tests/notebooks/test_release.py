@@ -35,7 +35,7 @@ def released(tmp_path_factory, course, repo_root):
     proc = subprocess.run(
         [sys.executable, "-m", "autograder", "release", "--out", str(out),
          "--course-root", str(course.root)],
-        cwd=repo_root, env=nbgrader_env(), capture_output=True, text=True, timeout=600,
+        cwd=repo_root, env=nbgrader_env(), capture_output=True, text=True, timeout=600, check=False,
     )
     assert proc.returncode == 0, f"release failed:\n{proc.stdout}\n{proc.stderr}"
     files = sorted((out / ASSIGNMENT).iterdir())
@@ -109,3 +109,19 @@ def test_release_errors_only_at_stubs(released, source):
     assert items, "no auto-graded items found"
     passing = sorted(f"test_{name}" for name in items if f"test_{name}" not in failed_tests)
     assert not passing, f"test cells that pass on the untouched stubs: {passing}"
+
+
+def test_leak_check_rejects_source_notebooks():
+    """The release command's own guard: fed the instructor's notebooks (which do hold solutions
+    and hidden tests), it must refuse them and name what leaks."""
+    from autograder.release import ReleaseLeak, check_release
+
+    with pytest.raises(ReleaseLeak) as info:
+        check_release(NOTEBOOKS)
+    message = str(info.value)
+    assert "BEGIN SOLUTION" in message and "BEGIN HIDDEN TESTS" in message
+    if any(c.cell_type == "markdown" and nbgrader_meta(c).get("solution")
+           for p in NOTEBOOKS for c in read(p).cells):
+        assert "manually graded answer" in message  # the model answers with their rubrics
+    for path in NOTEBOOKS:
+        assert path.name in message

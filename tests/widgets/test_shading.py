@@ -54,6 +54,15 @@ def test_exam_button_shows_the_printed_answer(explorer):
                                atol=5e-4)
     html = explorer.readout.value
     assert "0.0931" in html and "0.6988" in html
+    # the browser rounds the sliders to their step (elevation 35.26 -> 35.5): still the exam's
+    explorer.light_elevation.value = 35.5
+    np.testing.assert_allclose(explorer.probe_values["phong"][2], 0.5 + 0.25 * (1 - 1 / SQ3)
+                               + (0.5 + 0.5 / SQ3) ** 10, rtol=1e-12)
+    # moving a direction slider by a step or more leaves the exam's directions
+    explorer.light_elevation.value = 36.0
+    np.testing.assert_allclose(explorer.L, ws.direction(-45.0, 36.0), atol=1e-12)
+    assert "0.0931" not in explorer.readout.value
+    explorer.load_exam()
     # and the probe is drawn where N = (0, 1/2, sqrt3/2) lands seen from +y (right = -x, up = z)
     row_col = (explorer.probe_markers[0].get_ydata()[0], explorer.probe_markers[0].get_xdata()[0])
     x, y = 0.0, SQ3 / 2

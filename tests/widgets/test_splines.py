@@ -3,7 +3,6 @@ through synthetic matplotlib events) and check the drawn data against the exam's
 
 from __future__ import annotations
 
-import time
 
 import matplotlib
 
@@ -179,16 +178,14 @@ def test_press_away_from_points_drags_nothing(ex):
     np.testing.assert_array_equal(ex.points, before)
 
 
-def test_update_is_fast_and_in_place(ex):
+def test_update_is_in_place(ex):
+    """Updates change artists in place (no new artists); their speed is in benchmarks/."""
     ex.kind.value = "b-spline"
     lines = list(ex.ax.lines)
     patches = list(ex.ax.patches)
-    ex.fig.canvas.draw_idle = lambda *a, **k: None  # time the computation, not Agg rendering
-    t0 = time.perf_counter()
+    ex.fig.canvas.draw_idle = lambda *a, **k: None
     for i in range(50):
         ex.x.value = 5.0 + 0.01 * i
-    per_update = (time.perf_counter() - t0) / 50
-    assert per_update < 0.02  # "well under 50 ms" (about 1 ms measured)
     assert list(ex.ax.lines) == lines and list(ex.ax.patches) == patches  # no new artists
 
 

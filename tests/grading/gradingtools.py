@@ -1,0 +1,190 @@
+"""Builders for the grading bank: submissions made from the course's own notebooks.
+
+A *submission* is an nbgrader notebook as a student would hand it in. The builders start from a
+source notebook and produce
+
+- :func:`release_version`: what ``nbgrader generate_assignment`` gives students (solution bodies
+  replaced by ``raise NotImplementedError()``, written answers by "YOUR ANSWER HERE", hidden
+  tests removed, outputs cleared);
+- :func:`model_version`: the same notebook with the instructor's model answers filled in (the
+  "student who copied the model answer"), which the bank uses as the honest baseline around each
+  adversarial edit;
+- edits on either (:func:`set_cell`, :func:`cell_index`...).
+
+Everything the tests compare against is decided here, independently of the grader: the points
+come from the source notebook, the case counts from the registry with the grader's documented
+seed (:func:`autograder.grading.case_seed`).
+"""
+
+from __future__ import annotations
+
+import copy
+import csv
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from autograder.exercises import REGISTRY
+from autograder.grading import case_seed, load_source
+
+REPO = Path(__file__).resolve().parents[2]
+#: Per-case time limit used by the grading tests (s): small, so hangs cost little.
+CASE_TIMEOUT = 1.5
+SECRET = b"grading-bank-secret-0001"
+
+_SOLUTION = re.compile(r"^[ \t]*### BEGIN SOLUTION[^\n]*\n(.*?)^[ \t]*### END SOLUTION[^\n]*\n?",
+                       re.S | re.M)
+_HIDDEN = re.compile(r"^[ \t]*### BEGIN HIDDEN TESTS.*?### END HIDDEN TESTS[^\n]*\n?", re.S | re.M)
+
+
+def course_sources():
+    """The parsed source notebooks that have auto-graded exercises in the registry."""
+    from autograder.course import source_notebooks
+
+    out = []
+    for path in source_notebooks():
+        try:
+            src = load_source(path)
+        except (OSError, ValueError):
+            continue
+        if any(name in REGISTRY for name, _, _ in src.graded):
+            out.append(src)
+    return out
+
+
+def _src_text(cell: dict) -> str:
+    s = cell.get("source", "")
+    return "".join(s) if isinstance(s, list) else s
+
+
+def _meta(cell: dict) -> dict:
+    return cell.get("metadata", {}).get("nbgrader", {}) or {}
+
+
+def _clear(cell: dict) -> None:
+    if cell["cell_type"] == "code":
+        cell["outputs"] = []
+        cell["execution_count"] = None
+
+
+def release_version(src) -> dict:
+    """The student version of a source notebook (what generate_assignment produces)."""
+    nb = copy.deepcopy(src.nb)
+    for cell in nb["cells"]:
+        meta = _meta(cell)
+        text = _src_text(cell)
+        if meta.get("solution") and cell["cell_type"] == "code":
+            text = _SOLUTION.sub(lambda m: _indent_of(m.group(0)) + "# YOUR CODE HERE\n"
+                                 + _indent_of(m.group(0)) + "raise NotImplementedError()\n", text)
+        elif meta.get("solution") and cell["cell_type"] == "markdown":
+            text = "YOUR ANSWER HERE"
+        elif meta.get("grade") and cell["cell_type"] == "code":
+            text = _HIDDEN.sub("", text)
+        cell["source"] = text
+        _clear(cell)
+    return nb
+
+
+def model_version(src) -> dict:
+    """The source notebook as a submission: model answers in, markers and hidden tests out."""
+    nb = copy.deepcopy(src.nb)
+    for cell in nb["cells"]:
+        meta = _meta(cell)
+        text = _src_text(cell)
+        if meta.get("solution"):
+            text = _SOLUTION.sub(lambda m: m.group(1), text)
+        elif meta.get("grade") and cell["cell_type"] == "code":
+            text = _HIDDEN.sub("", text)
+        cell["source"] = text
+        _clear(cell)
+    return nb
+
+
+def _indent_of(block: str) -> str:
+    return block[: len(block) - len(block.lstrip(" \t"))]
+
+
+def cell_index(nb: dict, grade_id: str) -> int:
+    for i, cell in enumerate(nb["cells"]):
+        if _meta(cell).get("grade_id") == grade_id:
+            return i
+    raise KeyError(grade_id)
+
+
+def set_cell(nb: dict, grade_id: str, source: str) -> dict:
+    nb["cells"][cell_index(nb, grade_id)]["source"] = source
+    return nb
+
+
+def append_cell(nb: dict, grade_id: str, extra: str) -> dict:
+    i = cell_index(nb, grade_id)
+    nb["cells"][i]["source"] = _src_text(nb["cells"][i]).rstrip("\n") + "\n\n" + extra
+    return nb
+
+
+def function_names(src) -> list[str]:
+    return [name for name, _, _ in src.graded
+            if name in REGISTRY and REGISTRY[name].kind == "function"]
+
+
+def target_of(src) -> str:
+    """The function the adversarial edits target: one that no other solution cell calls (so
+    breaking it costs exactly its own test), with at least three cases."""
+    model = model_version(src)
+    sol = {(_meta(c).get("grade_id")): _src_text(c) for c in model["cells"]
+           if _meta(c).get("solution") and c["cell_type"] == "code"}
+    for name in function_names(src):
+        others = [text for gid, text in sol.items() if gid != name]
+        if any(re.search(rf"\b{re.escape(name)}\s*\(", t) for t in others):
+            continue
+        if len(REGISTRY[name].cases(np.random.default_rng(0))) >= 3:
+            return name
+    return function_names(src)[0]
+
+
+def cases_of(student: str, name: str, secret: bytes = SECRET):
+    """The cases the grader draws for ``student`` (the grader's documented seeding)."""
+    ex = REGISTRY[name]
+    if ex.kind == "choice":
+        return [None]
+    return list(ex.cases(np.random.default_rng(case_seed(secret, student, name))))
+
+
+def write_nb(path: Path, nb) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if isinstance(nb, bytes):
+        path.write_bytes(nb)
+    elif isinstance(nb, str):
+        path.write_text(nb, encoding="utf-8")
+    else:
+        path.write_text(json.dumps(nb, indent=1), encoding="utf-8")
+
+
+def run_grade(submitted: Path, out: Path, *extra: str, jobs: int = 2,
+              timeout: float = CASE_TIMEOUT, secret_file: Path | None = None,
+              check: bool = True) -> subprocess.CompletedProcess:
+    """``python -m autograder grade`` exactly as an instructor runs it."""
+    if secret_file is None:
+        secret_file = out.parent / "secret"
+        secret_file.write_bytes(SECRET + b"\n")
+    env = dict(os.environ, MPLBACKEND="Agg",
+               PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}")
+    cmd = [sys.executable, "-m", "autograder", "grade", str(submitted), "--out", str(out),
+           "--jobs", str(jobs), "--timeout", str(timeout), "--load-timeout", "20",
+           "--secret-file", str(secret_file), "--quiet", *extra]
+    proc = subprocess.run(cmd, cwd=REPO, env=env, capture_output=True, text=True, timeout=900)
+    if check and proc.returncode != 0:
+        raise AssertionError(f"grade exited {proc.returncode}:\n{proc.stderr[-4000:]}")
+    return proc
+
+
+def read_grades(out: Path) -> dict[tuple[str, str, str], dict]:
+    with open(out / "grades.csv", newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    return {(r["student"], r["notebook"], r["grade_id"]): r for r in rows}
