@@ -150,7 +150,8 @@ def sync(batch: Batch, sources: list[SourceNotebook], submitted: Path, out: Path
                     continue
                 if r.kind == "manual":
                     grade.auto_score = None if r.status == "manual" else 0.0
-                    grade.needs_manual_grade = r.status == "manual" or grade.manual_score is not None
+                    grade.needs_manual_grade = (r.status == "manual"
+                                                or grade.manual_score is not None)
                 else:
                     grade.auto_score = float(r.score or 0.0)
                     grade.needs_manual_grade = grade.manual_score is not None
@@ -240,13 +241,19 @@ def autograded_notebook(src: SourceNotebook, sub: Submission,
             cells.append(c)
     else:
         cells = _merge(src, sub)
-    for c in cells:
+    seen_ids: set[str] = set()
+    for k, c in enumerate(cells):
         gid = (c.get("metadata", {}).get("nbgrader") or {}).get("grade_id")
         if gid in results and c.get("cell_type") == "code" and results[gid].kind != "manual":
             c["outputs"] = [_verdict_output(results[gid])]
+        # nbformat 4.5 wants a unique id per cell: the grade_id where there is one
+        cid = re.sub(r"[^A-Za-z0-9_-]", "-", gid)[:64] if gid else f"cell-{k}"
+        while cid in seen_ids:
+            cid = f"{cid[:56]}-{k}"
+        seen_ids.add(cid)
+        c["id"] = cid
     return {"cells": cells, "metadata": copy.deepcopy(src.nb.get("metadata", {})),
-            "nbformat": 4, "nbformat_minor": int(src.nb.get("nbformat_minor", 5))
-            if isinstance(src.nb.get("nbformat_minor"), int) else 5}
+            "nbformat": 4, "nbformat_minor": 5}
 
 
 def _merge(src: SourceNotebook, sub: Submission) -> list[dict]:

@@ -393,7 +393,8 @@ class CaseRecord:
     index: int
     label: str
     visible: bool
-    verdict: str          #: pass | wrong-value | wrong-shape | error | timeout | rejected | reference-used
+    #: pass | wrong-value | wrong-shape | error | timeout | rejected | reference-used
+    verdict: str
     reason: str = ""
     args: tuple = ()
     kwargs: dict = field(default_factory=dict)

@@ -83,7 +83,8 @@ class SandboxJob:
     cells: list[tuple[str, str]]                #: (label, python source) of the student's cells
     cases: list[tuple[tuple, dict]]             #: (args, kwargs) per case; one empty for choice
     reference_targets: list[tuple[str, str]] = field(default_factory=list)  #: (module, qualname)
-    graded_names: list[str] = field(default_factory=list)  #: names whose course_lib copies are stubbed
+    #: graded names: a course_lib function of that name is stubbed wherever it is found
+    graded_names: list[str] = field(default_factory=list)
     protected_prefixes: list[str] = field(default_factory=lambda: ["course_lib"])
     deny_paths: list[str] = field(default_factory=list)    #: directories the child may not read
 
@@ -93,7 +94,8 @@ class CaseOutcome:
     """What happened in one case, as observed by the grader (no verdict yet)."""
 
     index: int
-    kind: str           #: returned | raised | timeout | crashed | rejected | reference-used | not-run
+    #: returned | raised | timeout | crashed | rejected | reference-used | not-run
+    kind: str
     value: Any = None   #: the decoded plain data for ``returned``
     error_type: str = ""
     error_mro: tuple = ()
@@ -401,7 +403,8 @@ def _launch(job: SandboxJob, limits: Limits, workdir: str, slot: int, start: int
         spec["limits"] = {
             "case_timeout": limits.case_timeout, "memory_mb": limits.memory_mb,
             "fsize_mb": limits.fsize_mb, "nproc": limits.nproc,
-            "cpu_seconds": int(limits.load_timeout + limits.case_timeout * (len(job.cases) + 1)) + 5,
+            "cpu_seconds": int(limits.load_timeout
+                               + limits.case_timeout * (len(job.cases) + 1)) + 5,
             "output_bytes": limits.output_bytes,
         }
         spec["scratch"] = scratch
@@ -418,7 +421,8 @@ def _launch(job: SandboxJob, limits: Limits, workdir: str, slot: int, start: int
         env = _job_env(scratch)
         drop = f"{ident[0]}:{ident[1]}" if ident is not None else ""
         rfd, wfd = os.pipe()
-        with tempfile.TemporaryFile(dir=workdir) as fout, tempfile.TemporaryFile(dir=workdir) as ferr:
+        with tempfile.TemporaryFile(dir=workdir) as fout, \
+                tempfile.TemporaryFile(dir=workdir) as ferr:
             try:
                 if zygote is not None:
                     pid = zygote.spawn({"scratch": scratch, "env": env, "drop": drop},
@@ -484,7 +488,8 @@ def _read_capped(f, cap: int) -> str:
     return text
 
 
-def _watch(handle: _Handle, rfd, job: SandboxJob, limits: Limits, start: int, scratch: str, out: dict):
+def _watch(handle: _Handle, rfd, job: SandboxJob, limits: Limits, start: int, scratch: str,
+           out: dict) -> None:
     """Read the child's manifest until it is done, dies, or misses a deadline."""
     buf = b""
     total = 0
@@ -581,7 +586,8 @@ def _decode_case(ev: dict, i: int, scratch: str) -> CaseOutcome:
     msg = str(ev.get("message", ""))[:2000]
     if kind == "returned":
         try:
-            arrays = _load_arrays(os.path.join(scratch, f"case_{i}.npz")) if ev.get("arrays") else {}
+            arrays = (_load_arrays(os.path.join(scratch, f"case_{i}.npz"))
+                      if ev.get("arrays") else {})
             value = _decode_value(ev.get("value"), arrays, 0)
         except _BadOutput as exc:
             return CaseOutcome(i, "rejected", message=str(exc), seconds=secs)

@@ -1,9 +1,10 @@
 """Widgets: the compute behind one update of each explorer, and the full update with drawing.
 
-Every explorer class of ``course_lib/widgets/<topic>.py`` (a class with an ``update()`` method
-and a matplotlib figure ``fig``) is built with its defaults under the Agg backend and driven
-through its own controls: each of ~50 updates moves one of its numeric sliders (in turn, to a
-new value across the slider's range), the way a student drags them. Two rows per explorer:
+Every explorer class of ``course_lib/widgets/<topic>.py`` (a class named ``*Explorer`` with an
+``update()`` method and a matplotlib figure, ``fig``) is built with its defaults under the Agg
+backend and driven through its own controls: each of ~50 updates moves one of its numeric
+sliders (in turn, to a new value across the slider's range), the way a student drags them.
+Two rows per explorer:
 
 - **compute**: the work of one update without drawing: the explorer's separated compute
   method when it has one (``refresh()``), otherwise ``update()`` with the canvas' ``draw_idle``
@@ -50,13 +51,18 @@ def explorer_classes() -> list[tuple[str, type]]:
 
 
 def sliders(explorer) -> list:
-    """The explorer's numeric sliders (attributes, or inside list/tuple attributes)."""
+    """The explorer's numeric sliders (attributes, or inside list, tuple or dict attributes)."""
     import ipywidgets as W
 
     kinds = (W.FloatSlider, W.IntSlider, W.FloatLogSlider)
     out, seen = [], set()
     for value in vars(explorer).values():
-        items = value if isinstance(value, (list, tuple)) else [value]
+        if isinstance(value, dict):
+            items = list(value.values())
+        elif isinstance(value, (list, tuple)):
+            items = value
+        else:
+            items = [value]
         for w in items:
             if isinstance(w, kinds) and id(w) not in seen and not getattr(w, "disabled", False):
                 seen.add(id(w))
@@ -108,9 +114,14 @@ def _stats(samples: list[float]) -> tuple[float, float]:
 def measure(cls, updates: int) -> dict:
     """Median and 95th percentile (ms) of the compute and of update + draw for one explorer."""
     import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     explorer = cls()
-    fig = explorer.fig
+    fig = getattr(explorer, "fig", None)
+    if not isinstance(fig, Figure):
+        fig = next((v for v in vars(explorer).values() if isinstance(v, Figure)), None)
+    if fig is None:
+        raise RuntimeError("no matplotlib figure found on the explorer")
     canvas = fig.canvas
     try:
         fig.canvas.draw()                            # first draw: fonts, caches

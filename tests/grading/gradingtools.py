@@ -28,7 +28,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from autograder.exercises import REGISTRY
 from autograder.grading import case_seed, load_source

@@ -16,7 +16,6 @@ from __future__ import annotations
 import html
 import json
 import os
-import re
 import shutil
 import sqlite3
 import time
@@ -24,14 +23,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
 import pytest
 
 from autograder.exercises import REGISTRY
 
 from gradingtools import (CASE_TIMEOUT, SECRET, append_cell, cases_of, cell_index, course_sources,
-                      model_version, read_grades, release_version, run_grade, set_cell,
-                      target_of, write_nb)
+                      model_version, read_grades, release_version, run_grade, target_of, write_nb)
 
 pytestmark = [pytest.mark.xdist_group("grading")]
 

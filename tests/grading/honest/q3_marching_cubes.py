@@ -1,3 +1,4 @@
+# ruff: noqa: F821  (CORNERS, EDGES, N_TRIANGLES, TRI_TABLE come from the notebook's setup cell)
 """Q3 written from the exam and the given lookup tables (not from course_lib's functions).
 
 The setup cell of the notebook gives CORNERS, EDGES, N_TRIANGLES and TRI_TABLE (the classic
