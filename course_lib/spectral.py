@@ -385,7 +385,8 @@ def spectral_phong(reflectance, light, Ia, ka, Ip, kd, ks, n, L, N, V) -> np.nda
 
     Notes
     -----
-    Q5(d): "sampling the spectra at n wavelengths and evaluating the model at each wavelength".
+    Q5(d): the improvement the examiners describe — run the model once per sampled wavelength
+    (n samples of each spectrum) and only then reduce the result to RGB.
     The specular term reflects the light's own spectrum (a white highlight under white light).
     """
     rho = as_float_array(reflectance, "reflectance")
