@@ -105,7 +105,8 @@ def run_nbgrader(
     if check and (proc.returncode != 0 or "[ERROR]" in proc.stderr):
         tail = "\n".join((proc.stderr or proc.stdout).strip().splitlines()[-40:])
         raise RuntimeError(
-            f"nbgrader {' '.join(map(str, args))} failed (exit {proc.returncode}) in {root}:\n{tail}"
+            f"nbgrader {' '.join(map(str, args))} failed (exit {proc.returncode}) "
+            f"in {root}:\n{tail}"
         )
     return proc
 
@@ -113,11 +114,13 @@ def run_nbgrader(
 def config_text(db_url: str, exchange_root: Path | None = None) -> str:
     """The ``nbgrader_config.py`` of the course."""
     lines = [
-        '"""nbgrader configuration of 4F9 (written by autograder/course.py; edits are overwritten)."""',
+        '"""nbgrader configuration of 4F9 (written by autograder/course.py; edits are lost)."""',
         "c = get_config()  # noqa: F821",
         "",
         f"c.CourseDirectory.course_id = {COURSE_ID!r}",
         f"c.CourseDirectory.db_url = {db_url!r}",
+        f"# the assignment, {ASSIGNMENT!r}, is named on each nbgrader command line (setting",
+        "# CourseDirectory.assignment_id here would clash with it)",
         "",
         "# the student versions: every solution becomes a stub that raises NotImplementedError",
         f"c.ClearSolutions.code_stub = {{'python': {CODE_STUB!r}}}",
@@ -133,7 +136,8 @@ def config_text(db_url: str, exchange_root: Path | None = None) -> str:
         f"c.IgnorePattern.pattern = {IGNORE_STDERR!r}",
         "",
         "# keep notebook checkpoints and caches out of the release",
-        "c.CourseDirectory.ignore = ['.ipynb_checkpoints', '*.pyc', '__pycache__', 'feedback', '.*']",
+        "c.CourseDirectory.ignore = "
+        "['.ipynb_checkpoints', '*.pyc', '__pycache__', 'feedback', '.*']",
     ]
     if exchange_root is not None:
         lines += ["", f"c.Exchange.root = {str(exchange_root)!r}"]
@@ -187,8 +191,8 @@ def prepare_course(
 ) -> CourseDir:
     """Create (or refresh) an nbgrader course in ``root`` with the assignment released.
 
-    Copies the source notebooks into ``root/source/tripos2006/``, writes ``root/nbgrader_config.py``,
-    registers the assignment in the gradebook and runs
+    Copies the source notebooks into ``root/source/tripos2006/``, writes
+    ``root/nbgrader_config.py``, registers the assignment in the gradebook and runs
     ``nbgrader generate_assignment tripos2006 --force``. Re-running with unchanged sources and
     configuration skips nbgrader altogether (a stamp file records what was released).
     """

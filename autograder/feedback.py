@@ -94,7 +94,7 @@ def _cell_html(r: CellResult, reveal: bool) -> str:
     if r.kind == "choice":
         if r.cases and reveal and r.cases[0].verdict != "pass":
             parts.append("<p class='note'>See the model answer in the released solutions.</p>")
-        return "\n".join(parts)
+        return "\n".join(parts + _outputs(r))
     if r.kind == "manual" or not r.cases:
         return "\n".join(parts + _outputs(r))
     visible = [c for c in r.cases if c.visible]
@@ -130,6 +130,10 @@ def _cell_html(r: CellResult, reveal: bool) -> str:
 
 def _outputs(r: CellResult) -> list[str]:
     parts = []
+    if r.code.strip():
+        what = "your answer" if r.kind == "manual" else "your code, as graded"
+        parts.append(f"<details class='code'><summary>{what}</summary>"
+                     f"<pre>{_e(r.code[:20000])}</pre></details>")
     for label, text in (("printed output", r.stdout), ("warnings and errors printed", r.stderr)):
         if text.strip():
             parts.append(f"<details><summary>{label} (not graded)</summary>"
@@ -260,7 +264,7 @@ def _plot(c: CaseRecord) -> str:
         if len(pts) < 2:
             return ""
         x, y = tx(pts)
-        d = " ".join(f"{a:.1f},{b:.1f}" for a, b in zip(x, y))
+        d = " ".join(f"{a:.1f},{b:.1f}" for a, b in zip(x, y, strict=True))
         tag = "polygon" if closed else "polyline"
         return f"<{tag} points='{d}' fill='none' {style}/>"
 

@@ -421,6 +421,7 @@ class CellResult:
     stderr: str = ""
     notes: list[str] = field(default_factory=list)
     seconds: float = 0.0
+    code: str = ""                  #: the student's graded cell (or written answer), for feedback
 
     def row(self) -> dict:
         return {"student": self.student, "notebook": self.notebook, "grade_id": self.grade_id,
@@ -629,12 +630,14 @@ def grade_batch(submitted: Path, sources: list[SourceNotebook], opts: Options,
                     continue
                 tasks.append(Task(student, src, sub, plan, name, test_id, points))
             for gid, points in src.manual:
-                present = any(c["grade_id"] == gid for c in sub.cells)
+                answer = [c["source"] for c in sub.cells if c["grade_id"] == gid]
+                present = bool(answer)
                 results.append(CellResult(
                     student, src.name, gid, gid, None if present else 0.0, points,
                     "manual" if present else "missing",
                     "marked by hand in formgrader" if present else
-                    f"the answer cell {gid} is missing from the notebook", kind="manual"))
+                    f"the answer cell {gid} is missing from the notebook", kind="manual",
+                    code=answer[-1] if answer else ""))
     results.extend(_run_tasks(tasks, opts))
     order = {s.name: i for i, s in enumerate(sources)}
     cell_order = {(s.name, gid): i for s in sources for i, gid in
@@ -655,10 +658,12 @@ def _run_tasks(tasks: list[Task], opts: Options) -> list[CellResult]:
     deny = sandbox.protected_dirs() + [str(opts.out.resolve())]
     deny += sorted({str(t.src.path.resolve().parent) for t in tasks})
     deny += sorted({str(t.sub.path.resolve().parent.parent.parent) for t in tasks})
+    # only course_lib is ever loaded into a sandbox (never the registry itself)
     reference_targets = sorted({(ex.reference.__module__, ex.reference.__name__)
                                 for ex in REGISTRY.values()
                                 if ex.kind == "function" and ex.reference is not None
-                                and hasattr(ex.reference, "__name__")})
+                                and hasattr(ex.reference, "__name__")
+                                and str(ex.reference.__module__).startswith("course_lib.")})
     graded_names = sorted(n for n, ex in REGISTRY.items() if ex.kind == "function")
     progress = _Progress(len(tasks), enabled=opts.progress)
     results: list[CellResult] = []
@@ -742,7 +747,7 @@ def grade_task(task: Task, opts: Options, workdir: str, slot: int, deny: list[st
         graded_names=list(graded_names), deny_paths=deny)
     run = sandbox.run_job(job, opts.limits, workdir, slot, zygote)
     records = []
-    for i, (case, exp, outcome) in enumerate(zip(cases, expected, run.outcomes)):
+    for i, (case, exp, outcome) in enumerate(zip(cases, expected, run.outcomes, strict=True)):
         verdict, reason = _verdict(ex, case, exp, outcome)
         if case is None:  # a multiple-choice answer: one visible "case", never revealed
             rec = CaseRecord(i, "your answer", True, verdict, reason)
@@ -753,6 +758,8 @@ def grade_task(task: Task, opts: Options, workdir: str, slot: int, deny: list[st
                              raises=case.raises.__name__ if case.raises else "")
         records.append(rec)
     notes = list(task.plan.notes.get(task.name, []))
+    k = task.plan.chosen.get(task.name)
+    code = task.sub.cells[k]["source"] if k is not None else ""
     load_notes = [n for n in run.load_notes if not n.startswith("the setup cell")]
     if not run.defined:
         why = "; ".join(_clip(n, 200) for n in load_notes[-3:])
@@ -761,7 +768,7 @@ def grade_task(task: Task, opts: Options, workdir: str, slot: int, deny: list[st
                          "error", f"the {what} {task.name} is not defined after running your "
                          "solution cells" + (f" ({why})" if why else ""), kind=ex.kind,
                          cases=records, stdout=run.stdout, stderr=run.stderr, notes=notes,
-                         seconds=run.seconds)
+                         seconds=run.seconds, code=code)
         return res
     score, status, message = summarise(records, task.points)
     if notes:
@@ -771,7 +778,7 @@ def grade_task(task: Task, opts: Options, workdir: str, slot: int, deny: list[st
         print(f"warning: {task.src.name}: {setup_notes[0]}", file=sys.stderr)
     return CellResult(task.student, task.src.name, task.test_id, task.name, score, task.points,
                       status, message, kind=ex.kind, cases=records, stdout=run.stdout,
-                      stderr=run.stderr, notes=notes + load_notes, seconds=run.seconds)
+                      stderr=run.stderr, notes=notes + load_notes, seconds=run.seconds, code=code)
 
 
 class _Progress:
@@ -861,8 +868,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="after the deadline: show the failing hidden cases' inputs, "
                              "expected and received values in the feedback")
     parser.add_argument("--secret-file", type=Path, default=None,
-                        help=f"the course secret that seeds the hidden cases (default "
-                             f"{DEFAULT_SECRET}, created on first use)")
+                        help="the course secret that seeds the hidden cases (default "
+                             "~/.config/4f9/secret, created on first use)")
     parser.add_argument("--source", type=Path, default=None,
                         help="folder of the source notebooks (default: the course's notebooks/)")
     parser.add_argument("--load-timeout", type=float, default=None,

@@ -34,7 +34,14 @@ import sys
 import tempfile
 from pathlib import Path
 
-from .course import ASSIGNMENT, COURSE_ID, DEFAULT_COURSE_ROOT, nbgrader_env, prepare_course
+from .course import (
+    ASSIGNMENT,
+    CELL_TIMEOUT,
+    COURSE_ID,
+    DEFAULT_COURSE_ROOT,
+    nbgrader_env,
+    prepare_course,
+)
 
 #: JupyterLab 4 plugin ids of nbgrader 0.9 (``@jupyter/nbgrader`` since 0.9.3).
 NBGRADER_PLUGINS = (
@@ -55,6 +62,8 @@ STUDENT_DISABLED_SERVER_EXTENSIONS = (
     "nbgrader.server_extensions.course_list",
 )
 ROLES = ("student", "instructor")
+#: JupyterLab's news/announcements plugin, off in both views.
+NEWS_PLUGIN = "@jupyterlab/apputils-extension:announcements"
 
 
 def page_config(role: str) -> dict:
@@ -62,22 +71,28 @@ def page_config(role: str) -> dict:
     if role not in ROLES:
         raise ValueError(f"role must be one of {ROLES}, not {role!r}")
     disabled = STUDENT_DISABLED_PLUGINS if role == "student" else ()
-    return {"disabledExtensions": {p: (p in disabled) for p in NBGRADER_PLUGINS}}
+    config = {p: (p in disabled) for p in NBGRADER_PLUGINS}
+    # no "get notified about Jupyter news?" pop-up over the course (it also calls out to the net)
+    config[NEWS_PLUGIN] = True
+    return {"disabledExtensions": config}
 
 
 def server_config(role: str) -> dict:
     """The ``jupyter_server_config.json`` of a launch (server extensions on or off)."""
     if role == "instructor":
         return {}
-    return {"ServerApp": {"jpserver_extensions": {e: False for e in STUDENT_DISABLED_SERVER_EXTENSIONS}}}
+    off = {ext: False for ext in STUDENT_DISABLED_SERVER_EXTENSIONS}
+    return {"ServerApp": {"jpserver_extensions": off}}
 
 
 def write_launch_config(config_dir: Path, role: str, course_root: Path) -> Path:
     """Fill ``config_dir`` with the per-launch Jupyter configuration for ``role``."""
     config_dir = Path(config_dir)
     (config_dir / "labconfig").mkdir(parents=True, exist_ok=True)
-    (config_dir / "labconfig" / "page_config.json").write_text(json.dumps(page_config(role), indent=1))
-    (config_dir / "jupyter_server_config.json").write_text(json.dumps(server_config(role), indent=1))
+    (config_dir / "labconfig" / "page_config.json").write_text(
+        json.dumps(page_config(role), indent=1))
+    (config_dir / "jupyter_server_config.json").write_text(
+        json.dumps(server_config(role), indent=1))
     if role == "student":
         # the Assignments panel reads nbgrader config from the Jupyter config path: point it at
         # the course's local exchange instead of /srv/nbgrader/exchange
@@ -85,6 +100,7 @@ def write_launch_config(config_dir: Path, role: str, course_root: Path) -> Path:
             "c = get_config()  # noqa: F821\n"
             f"c.CourseDirectory.course_id = {COURSE_ID!r}\n"
             f"c.Exchange.root = {str(Path(course_root).resolve() / 'exchange')!r}\n"
+            f"c.Execute.timeout = {CELL_TIMEOUT}  # the Validate button\n"
         )
     return config_dir
 
@@ -134,6 +150,9 @@ def launch(
     token = secrets.token_hex(24) if token is None else token
     write_launch_config(config_dir, role, course.root)
     env = nbgrader_env()
+    # the kernels must pick their backend as in any JupyterLab (inline, or the notebook's own
+    # ``%matplotlib widget``): the Agg that ``make`` and the test runs export would hide figures
+    env.pop("MPLBACKEND", None)
     env["JUPYTER_CONFIG_PATH"] = os.pathsep.join(
         [str(config_dir), *[p for p in env.get("JUPYTER_CONFIG_PATH", "").split(os.pathsep) if p]]
     )

@@ -47,7 +47,9 @@ def leaks(notebook: Path) -> list[str]:
     problems = []
     for i, cell in enumerate(nb.cells):
         meta = cell.get("metadata", {}).get("nbgrader", {})
-        where = f"{notebook.name} cell {i}" + (f" ({meta['grade_id']})" if meta.get("grade_id") else "")
+        where = f"{notebook.name} cell {i}"
+        if meta.get("grade_id"):
+            where += f" ({meta['grade_id']})"
         for marker in FORBIDDEN:
             if marker.lower() in cell.source.lower():
                 problems.append(f"{where}: contains {marker!r}")

@@ -32,10 +32,12 @@ def write_report(results: list[CellResult], sources: list[SourceNotebook], path:
 
 
 def notebook_totals(results: list[CellResult]) -> dict[str, dict[str, tuple[float, float]]]:
-    """``{notebook: {student: (auto score, auto max)}}``."""
+    """``{notebook: {student: (auto score, auto max)}}`` over the notebooks that were read
+    (a notebook that is missing or unreadable as a whole is left out of its distribution)."""
+    unread = {(student, nb) for student, nb, _, _ in ungradeable(results)}
     totals: dict[str, dict[str, list[float]]] = defaultdict(lambda: defaultdict(lambda: [0.0, 0.0]))
     for r in results:
-        if r.kind == "manual":
+        if r.kind == "manual" or (r.student, r.notebook) in unread:
             continue
         t = totals[r.notebook][r.student]
         t[0] += r.score or 0.0
@@ -64,11 +66,12 @@ def ungradeable(results: list[CellResult]) -> list[tuple[str, str, str, str]]:
     """``(student, notebook, status, message)`` of notebooks that could not be graded."""
     seen = {}
     for r in results:
-        if r.status in ("missing", "unreadable") and r.message and (
-                r.student, r.notebook) not in seen:
-            if "could not be graded" in r.message or "was submitted" in r.message:
-                seen[(r.student, r.notebook)] = (r.student, r.notebook, r.status, r.message)
-    return sorted(seen.values())
+        whole_notebook = "could not be graded" in r.message or "was submitted" in r.message
+        if r.status in ("missing", "unreadable") and whole_notebook \
+                and (r.student, r.notebook) not in seen:
+            seen[(r.student, r.notebook)] = (r.student, r.notebook, r.status, r.message)
+    # unreadable files first (something to chase), then missing notebooks
+    return sorted(seen.values(), key=lambda t: (t[2] != "unreadable", t[0], t[1]))
 
 
 def render(results: list[CellResult], sources: list[SourceNotebook]) -> str:
@@ -86,8 +89,9 @@ def render(results: list[CellResult], sources: list[SourceNotebook]) -> str:
         scores = [v[0] for v in per.values()]
         top = max((v[1] for v in per.values()), default=sum(g[2] for g in src.graded))
         mean = sum(scores) / len(scores) if scores else 0.0
-        out.append(f"<div class='card'><b>{_e(src.name)}</b> <span class='note'>(auto-graded out "
-                   f"of {top:g}; mean {mean:.2f})</span><br>{histogram_svg(scores, top)}</div>")
+        out.append(f"<div class='card'><b>{_e(src.name)}</b> <span class='note'>({len(scores)} "
+                   f"submitted; auto-graded out of {top:g}; mean {mean:.2f})</span><br>"
+                   f"{histogram_svg(scores, top)}</div>")
     out.append("</div>")
 
     out.append("<h2>Most-failed tests</h2><table><tr><th>notebook</th><th>test</th>"
@@ -100,7 +104,9 @@ def render(results: list[CellResult], sources: list[SourceNotebook]) -> str:
     out.append("</table>")
 
     bad = ungradeable(results)
-    out.append(f"<h2>Submissions that could not be graded ({len(bad)})</h2>")
+    kinds = Counter(status for _, _, status, _ in bad)
+    out.append(f"<h2>Submissions that could not be graded ({kinds.get('unreadable', 0)} "
+               f"unreadable, {kinds.get('missing', 0)} missing)</h2>")
     if bad:
         out.append("<table><tr><th>student</th><th>notebook</th><th>status</th><th>why</th></tr>")
         for student, nb, status, msg in bad:

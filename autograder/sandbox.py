@@ -974,6 +974,12 @@ def _child_main(scratch: str, fd: int | None = None,
         if os.getuid() == 0 or os.geteuid() == 0:
             real_exit(70)
     _limit(resource.RLIMIT_NPROC, int(lim["nproc"]))
+    try:  # the one way to start a process that Python 3.11 does not audit
+        import _posixsubprocess
+
+        del _posixsubprocess.fork_exec
+    except (ImportError, AttributeError):
+        pass
     sys.addaudithook(hook)
 
     def on_alarm(signum, frame):

@@ -40,6 +40,8 @@ from .harness import REPO, Row
 SECTION = "marching cubes"
 SIZES = (64, 128, 256)
 SMOKE_SIZES = (16,)
+#: timed runs per method: more for the small volumes, whose few milliseconds a busy machine blurs
+REPEATS = {64: 15, 128: 9, 256: 5}
 #: (label, iso-level) of each volume kind
 KINDS = {"sphere": 0.7, "ct": 80.3}
 METHODS = ("ours", "lorensen", "lewiner")
@@ -158,7 +160,7 @@ def run(smoke: bool = False) -> list[Row]:
     tmp = Path(tempfile.mkdtemp(prefix="bench-mc-"))
     try:
         for n in SMOKE_SIZES if smoke else SIZES:
-            repeat = 3 if n >= 256 else 5
+            repeat = REPEATS.get(n, 5)
             for kind, iso in KINDS.items():
                 volume = make_volume(kind, n)
                 path = tmp / f"{kind}{n}.npy"

@@ -129,7 +129,7 @@ def _clip_rows(smoke: bool) -> list[Row]:
     as_lists = [p.tolist() for p in polys]
     counts_ours = [len(clip_polygon(p)) for p in polys]
     counts_naive = [len(naive_clip(p)) for p in as_lists]
-    mismatched = sum(a != b for a, b in zip(counts_ours, counts_naive))
+    mismatched = sum(a != b for a, b in zip(counts_ours, counts_naive, strict=True))
     kept = sum(c > 0 for c in counts_ours)
     ours = time_call(lambda: [clip_polygon(p) for p in polys], repeat=3)["median"]
     naive = time_call(lambda: [naive_clip(p) for p in as_lists], repeat=3)["median"]

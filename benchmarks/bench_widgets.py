@@ -161,7 +161,7 @@ def run(smoke: bool = False) -> list[Row]:
         case = f"{topic}: {cls.__name__}"
         try:
             m = measure(cls, updates)
-        except Exception as exc:  # noqa: BLE001 - one broken explorer is reported, the others still run
+        except Exception as exc:  # noqa: BLE001 - one broken explorer is reported
             print(f"warning: {case} could not be measured: {exc!r}", file=sys.stderr)
             rows.append(Row(SECTION, case, "compute per update", float("nan"),
                             notes=f"not measured: {type(exc).__name__}: {exc}"[:160]))

@@ -115,7 +115,7 @@ def plot_cube_numbering(ax=None):
     """The cube with its corner numbers (red) and edge numbers (blue), Lorensen/Bourke order."""
     ax = new_3d_axes(ax, size=4.5)
     art = draw_cube(ax, labels=True)
-    for axis, (d, name) in enumerate(zip(np.eye(3), "xyz")):
+    for d, name in zip(np.eye(3), "xyz"):
         ax.quiver(-0.25, -0.25, -0.25, *(0.3 * d), color="0.5", arrow_length_ratio=0.25)
         ax.text(*(-0.25 + 0.38 * d), name, color="0.4")
     _tidy(ax, lim=(-0.3, 1.15), title="corner (red) and edge (blue) numbers")

@@ -109,7 +109,7 @@ def sphere_pair(colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128, axes=None,
         _, axes = new_figure(2, size=3.6)
     axes = list(np.ravel(axes))
     art = {"images": [], "peaks": [], "analytic": [], "titles": [], "axes": list(axes)}
-    for ax, model, name in zip(axes, ("phong", "blinn"), ("Phong  (R·V)ⁿ", "Blinn-Phong  (N·H)ⁿ")):
+    for ax, _model, name in zip(axes, ("phong", "blinn"), ("Phong  (R·V)ⁿ", "Blinn-Phong  (N·H)ⁿ")):
         im = ax.imshow(np.zeros((size, size, 3)), interpolation="nearest",
                        extent=(-0.5, size - 0.5, size - 0.5, -0.5))
         peak, = ax.plot([], [], "o", mfc="none", mec=COLOURS["highlight"], ms=12, mew=1.8,

@@ -333,7 +333,7 @@ def test_floor_brighter_under_gaps_by_the_tissue_round_trip_loss(scan):
 def test_block_lengths_measured_from_image(scan):
     ph, _image, x, depth, _extent, env = scan
     measured = {}
-    for name, x0, x1, z0, z1 in ph["blocks"]:
+    for name, x0, x1, _z0, _z1 in ph["blocks"]:
         cols = _columns(x, x0, x1)
         top, _ = _floor_echo(env, depth, cols, 8, 12)
         bottom, _ = _floor_echo(env, depth, cols, 46, 56)

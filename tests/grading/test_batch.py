@@ -121,7 +121,7 @@ def test_feedback_pages_match_the_csv(batch, sources):
         page = batch["out"] / "feedback" / student / f"{nb}.html"
         text = html.unescape(page.read_text(encoding="utf-8"))
         assert f"{got:g} / {top:g}" in text, (student, nb)
-        for (s, n, gid), row in batch["rows"].items():
+        for (s, n, _gid), row in batch["rows"].items():
             if s == student and n == nb:
                 assert row["message"] in text
 

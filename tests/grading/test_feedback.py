@@ -122,3 +122,12 @@ def test_default_gradebook_is_an_nbgrader_course_in_out(tmp_path, sources):
     assert nb["nbformat"] == 4
     assert np.isclose(sum(float(r["score"] or 0) for r in rows.values()),
                       sum(p for _, _, p in src.graded))
+    # nbgrader's own feedback, generated from our autograded notebooks, shows our scores and no
+    # hidden test (plain nbgrader leaks them: nbgrader #917, #1363)
+    from autograder.course import run_nbgrader
+
+    run_nbgrader(["generate_feedback", "tripos2006", "--force"], out)
+    page = (out / "feedback" / "kim" / "tripos2006" / f"{src.name}.html").read_text()
+    assert "BEGIN HIDDEN TESTS" not in page and "autograder.incell" not in page
+    total = sum(p for _, _, p in src.graded)
+    assert re.search(rf"Score: {total:.1f} / \d", page)

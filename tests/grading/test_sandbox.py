@@ -146,3 +146,20 @@ def test_output_is_captured_and_capped(workdir, launcher):
     assert len(r.stdout) < 5400
     assert "truncated" in r.stdout
     assert "careful" in r.stderr
+
+
+def test_no_process_can_be_started(workdir, launcher):
+    code = ("import os, subprocess, sys\n"
+            "def f(x):\n"
+            "    tried = []\n"
+            "    for attempt in (lambda: subprocess.run(['true']), lambda: os.system('true'),\n"
+            "                    lambda: os.fork(), lambda: os.execv('/bin/true', ['true']),\n"
+            "                    lambda: sys.modules['_posixsubprocess'].fork_exec):\n"
+            "        try:\n"
+            "            attempt()\n"
+            "            tried.append('started')\n"
+            "        except (PermissionError, AttributeError):\n"
+            "            tried.append('blocked')\n"
+            "    return ' '.join(tried)\n")
+    r = run(workdir, launcher, code, cases=CASES[:1])
+    assert r.outcomes[0].value == "blocked blocked blocked blocked blocked"

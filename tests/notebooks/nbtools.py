@@ -80,8 +80,8 @@ def graded_items(nb) -> dict[str, str]:
         test = cells.get(f"test_{gid}")
         if test is None or not nbgrader_meta(test).get("grade"):
             continue
-        items[gid] = "function" if re.search(rf"^\s*def {re.escape(gid)}\(", cell.source, re.MULTILINE) \
-            else "choice"
+        defines = re.search(rf"^\s*def {re.escape(gid)}\(", cell.source, re.MULTILINE)
+        items[gid] = "function" if defines else "choice"
     return items
 
 

@@ -28,9 +28,11 @@ MARKS_PER_NOTEBOOK = 20
 ids = [p.stem for p in NOTEBOOKS]
 
 
-@pytest.mark.skipif(not CHECKER.exists(), reason=f"{CHECKER} not found (no ../shared beside the repo)")
+@pytest.mark.skipif(not CHECKER.exists(),
+                    reason=f"{CHECKER} not found (no ../shared beside the repository)")
 def test_contract_checker_reports_no_shortfalls():
-    proc = subprocess.run([sys.executable, str(CHECKER)], cwd=REPO_ROOT, capture_output=True, check=False,
+    proc = subprocess.run([sys.executable, str(CHECKER)], cwd=REPO_ROOT, capture_output=True,
+                          check=False,
                           text=True, timeout=120)
     summary = re.search(r"contract: (\d+) functions, (\d+) shortfalls", proc.stdout)
     assert summary, f"unexpected checker output:\n{proc.stdout}\n{proc.stderr}"

@@ -4,21 +4,27 @@ Each test starts the real command on a free port (course root in a temporary dir
 for the server, reads the page config that ``/lab`` embeds in its HTML (``jupyter-config-data``,
 what the JupyterLab front end reads its ``disabledExtensions`` from) and probes the nbgrader
 server extensions: students get no formgrader / course list / create-assignment, instructors get
-all of them; both keep validate and the assignments list.
+all of them; both keep validate and the assignments list. The instructor's formgrader lists
+``tripos2006`` from the course gradebook, a request without the token is refused, and (on Linux)
+the server's environment carries the per-launch config dir and no ``MPLBACKEND``.
 """
 
 from __future__ import annotations
 
 import html
 import json
+import os
 import re
 import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 import urllib.error
+import urllib.parse
 import urllib.request
+from pathlib import Path
 
 import pytest
 
@@ -76,7 +82,7 @@ def lab(request, course, repo_root, tmp_path):
             log.seek(0)
             pytest.fail(f"the {role} lab did not come up:\n{log.read()[-3000:]}")
         token = re.search(r"token=(\w+)", url).group(1)
-        yield role, port, token, url
+        yield role, port, token, url, proc.pid
     finally:
         proc.send_signal(signal.SIGINT)  # as Ctrl-C: the launcher stops JupyterLab
         try:
@@ -86,8 +92,26 @@ def lab(request, course, repo_root, tmp_path):
         log.close()
 
 
+def _server_environ(launcher_pid: int) -> dict[str, str] | None:
+    """The environment of the JupyterLab process the launcher started (Linux /proc only)."""
+    children = Path(f"/proc/{launcher_pid}/task/{launcher_pid}/children")
+    if not children.exists():
+        return None
+    pids = children.read_text().split()
+    if not pids:
+        return None
+    raw = Path(f"/proc/{pids[0]}/environ").read_bytes().split(b"\0")
+    return dict(item.decode().split("=", 1) for item in raw if b"=" in item)
+
+
 def test_lab_views(lab):
-    role, port, token, url = lab
+    role, port, token, url, launcher_pid = lab
+    assert "MPLBACKEND" in os.environ  # tests/conftest.py sets Agg, as `make` does
+    env = _server_environ(launcher_pid)
+    if env is not None:
+        # kernels choose their own backend in a lab (inline or the notebook's ipympl)
+        assert "MPLBACKEND" not in env
+        assert env["JUPYTER_CONFIG_PATH"].split(os.pathsep)[0].startswith(tempfile.gettempdir())
     assert url.startswith(f"http://localhost:{port}/lab")
     # a request without the token is refused
     status, _ = _get(f"http://127.0.0.1:{port}/api/contents")
@@ -110,6 +134,15 @@ def test_lab_views(lab):
         assert (formgrader, course_list) == (404, 404)
         assert root.endswith("/release")
         assert config.get("treePath") == ASSIGNMENT, "the student lab opens on the assignment"
+        # the Validate button's endpoint works: an untouched student version does not validate
+        nb = min(source_notebooks(), key=lambda p: p.stat().st_size).name
+        request = urllib.request.Request(
+            f"{base}/assignments/validate?token={token}", method="POST",
+            data=urllib.parse.urlencode({"path": f"{ASSIGNMENT}/{nb}"}).encode())
+        with urllib.request.urlopen(request, timeout=240) as r:
+            answer = json.loads(r.read())
+        assert answer["success"], answer
+        assert answer["value"].get("failed"), "an unanswered notebook passed validation"
     else:
         assert not {p for p in disabled if p.startswith("@jupyter/nbgrader")}
         assert (formgrader, course_list) == (200, 200)

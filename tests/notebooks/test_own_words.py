@@ -36,7 +36,8 @@ def course_texts():
 
 
 @pytest.mark.skipif(not SEED.exists(), reason="../shared/seed is not beside this checkout")
-@pytest.mark.parametrize("name,text", list(course_texts()), ids=lambda v: v if isinstance(v, str) and len(v) < 60 else "")
+@pytest.mark.parametrize("name,text", list(course_texts()),
+                         ids=lambda v: v if isinstance(v, str) and len(v) < 60 else "")
 def test_no_long_run_copied_from_the_solutions(name, text):
     copied = shingles(text) & shingles(SEED.read_text())
     examples = sorted(" ".join(s) for s in copied)[:3]

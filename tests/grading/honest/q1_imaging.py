@@ -32,7 +32,7 @@ def displayed_depths(thicknesses, speeds, c_assumed=1540.0):
         raise ValueError("negative thickness or non-positive speed")
     depth = 0.0
     out = []
-    for t, v in zip(T, c):
+    for t, v in zip(T, c, strict=True):
         depth += t * c_assumed / v
         out.append(depth)
     return np.array(out)

@@ -42,7 +42,7 @@ def count_symmetry_classes(complement=False, reflections=False):
     for perm in itertools.permutations(range(3)):
         for flips in itertools.product((False, True), repeat=3):
             matrix = np.zeros((3, 3))
-            for row, (col, flip) in enumerate(zip(perm, flips)):
+            for row, (col, flip) in enumerate(zip(perm, flips, strict=True)):
                 matrix[row, col] = -1.0 if flip else 1.0
             if not reflections and np.linalg.det(matrix) < 0:
                 continue
