@@ -21,7 +21,7 @@ def sections() -> list[str]:
 
 
 def fmt(x: float | None, unit: str = "") -> str:
-    if x is None:
+    if x is None or x != x:  # None or NaN: not measured
         return "—"
     if abs(x) >= 100:
         return f"{x:,.0f}{unit}"

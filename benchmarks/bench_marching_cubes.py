@@ -23,19 +23,15 @@ tables. The notes give the counts.
 
 from __future__ import annotations
 
-import json
-import os
 import shutil
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-from .harness import REPO, Row
+from .harness import Row, peak_memory_mib
 
 SECTION = "marching cubes"
 SIZES = (64, 128, 256)
@@ -122,25 +118,10 @@ def march(volume, path: str, iso: float, method: str):
 # ------------------------------------------------------------------------------------------------
 
 
-_LAUNCHER = ("import json, sys; from benchmarks.harness import peak_memory_mib; "
-             "print(json.dumps(peak_memory_mib(*json.loads(sys.argv[1]))))")
-
-
 def peak_memory(path: str, iso: float, method: str) -> float:
-    """:func:`benchmarks.harness.peak_memory_mib` of one call, started from a small launcher.
-
-    On Linux a new process inherits its parent's peak RSS (``ru_maxrss`` survives ``fork`` and
-    ``exec``), so a measuring process spawned by this big benchmark process would start with a
-    high-water mark of hundreds of MiB and report no growth at all. Spawned from a launcher
-    that imports nothing but the harness (about 20 MiB), the measuring process starts below
-    the size of its own input and its growth is the call's.
-    """
-    out = subprocess.run(
-        [sys.executable, "-c", _LAUNCHER,
-         json.dumps([__name__, "march", path, iso, method])],
-        capture_output=True, text=True, cwd=REPO, check=True,
-        env=dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1"))
-    return float(json.loads(out.stdout.strip().splitlines()[-1]))
+    """Extra peak RSS (MiB) of one ``march`` call in a fresh process (the harness resets the
+    kernel's high-water mark after the input is loaded, so only the call itself counts)."""
+    return peak_memory_mib(__name__, "march", path, iso, method)
 
 
 def _interleaved(volume, iso, repeat: int) -> dict:

@@ -37,8 +37,8 @@ class Row:
     @property
     def ratio(self) -> float | None:
         """ours / peer: below 1 means we are faster (or use less memory)."""
-        if self.peer in (None, 0):
-            return None
+        if self.peer in (None, 0) or self.peer != self.peer or self.ours != self.ours:
+            return None  # no peer, or a value that could not be measured (NaN)
         return self.ours / self.peer
 
 
@@ -58,19 +58,47 @@ def time_call(fn, repeat: int = 5, warmup: int = 1) -> dict:
 
 _MEMORY_SNIPPET = r"""
 import json, resource, sys, importlib
+from pathlib import Path
+
+def hwm_kib():
+    # the peak RSS of this process. A fresh process inherits its parent's ru_maxrss across
+    # fork/exec, so the kernel's own VmHWM (reset below via clear_refs) is read where it exists.
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1])
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+
+def rss_kib():
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+    except OSError:
+        pass
+    return hwm_kib()
+
 module, func, args = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
 mod = importlib.import_module(module)
 setup = getattr(mod, func + "_setup", None)
 state = setup(*args) if setup else None
-before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+try:
+    Path("/proc/self/clear_refs").write_text("5")  # reset the peak to the current RSS
+except OSError:
+    pass
+before = rss_kib() if Path("/proc/self/clear_refs").exists() else hwm_kib()
 getattr(mod, func)(state, *args)
-after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-print(json.dumps({"peak_kib": after - before}))
+print(json.dumps({"peak_kib": hwm_kib() - before}))
 """
 
 
 def peak_memory_mib(module: str, func: str, *args) -> float:
     """Extra peak RSS (MiB) of ``module.func(state, *args)`` in a fresh process.
+
+    The peak is the kernel's high-water mark (``VmHWM``), reset after the set-up through
+    ``/proc/self/clear_refs`` so that neither the set-up nor the parent's heap is counted.
 
     ``module.func_setup(*args)``, when defined, builds the input first so that its memory is not
     counted; only the growth of the peak during the call is reported.

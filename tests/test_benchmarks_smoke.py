@@ -65,4 +65,4 @@ def test_ratio_is_ours_over_peer():
 
     assert Row("s", "c", "m", 2.0, 4.0).ratio == 0.5
     assert Row("s", "c", "m", 2.0).ratio is None
-    assert math.isnan(Row("s", "c", "m", math.nan, 4.0).ratio)
+    assert Row("s", "c", "m", math.nan, 4.0).ratio is None  # not measured: no ratio
