@@ -73,6 +73,19 @@ def nbgrader_env(base: dict | None = None) -> dict:
     return env
 
 
+def use_this_environment() -> None:
+    """Put this interpreter's ``bin/`` first on this process's ``PATH``.
+
+    nbgrader's ``Gradebook`` runs ``alembic`` as a subprocess from *this* process (not only from
+    the nbgrader commands started through :func:`nbgrader_env`), so ``python -m autograder``
+    must work even when the venv was not activated (``.venv/bin/python -m autograder ...``).
+    """
+    os.environ["PATH"] = nbgrader_env({"PATH": os.environ.get("PATH", "")})["PATH"]
+
+
+use_this_environment()
+
+
 def default_db_url(root: Path) -> str:
     """nbgrader's default gradebook for a course root: ``sqlite:///<root>/gradebook.db``."""
     return f"sqlite:///{Path(root).resolve() / 'gradebook.db'}"

@@ -71,7 +71,7 @@ def render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: b
            f"<style>{_STYLE}</style></head><body>",
            f"<h1>{_e(notebook)}</h1>",
            f"<p class='total'>{_e(student)}: automatically graded "
-           f"<b>{got:g} / {sum(r.max_score for r in auto):g}</b>"]
+           f"<b>{round(got, 2):g} / {sum(r.max_score for r in auto):g}</b>"]
     if manual:
         out.append(f"; written answers ({sum(r.max_score for r in manual):g} marks) are marked "
                    "by hand")
@@ -86,7 +86,7 @@ def render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: b
 
 
 def _cell_html(r: CellResult, reveal: bool) -> str:
-    score = "–" if r.score is None else f"{r.score:g}"
+    score = "–" if r.score is None else f"{round(r.score, 2):g}"
     title = r.name if r.kind != "manual" else f"{r.name} (written answer)"
     parts = [f"<h2>{_e(title)} <span class='badge {_e(r.status)}'>{_e(r.status)}</span> "
              f"<small>{score} / {r.max_score:g}</small></h2>",

@@ -480,8 +480,16 @@ def cube_index(values, iso):
     return int(index) if index.ndim == 0 else index
 
 
-def _check_volume(volume, iso, spacing):
-    volume = as_float_array(volume, "volume")
+def _check_volume(volume, iso, spacing, finite=True):
+    """Checked ``(volume, iso, spacing)``; ``finite=False`` leaves the NaN/inf test of the
+    samples to the caller (:func:`_active_cells` does it slab by slab, while they are in cache)."""
+    if finite:
+        volume = as_float_array(volume, "volume")
+    else:
+        try:
+            volume = np.asarray(volume, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"volume must be numeric, got {type(volume).__name__}") from exc
     if volume.ndim != 3:
         raise ValueError(f"volume must be a 3-D array, got {volume.ndim} dimension(s)")
     if min(volume.shape) < 2:
@@ -505,9 +513,12 @@ _EDGE_AXIS, _EDGE_START = _edge_axis_offset()
 def marching_cubes(volume, iso, spacing=(1.0, 1.0, 1.0)):
     """Triangulated isosurface ``volume == iso`` by marching cubes, Q3(a)-(c).
 
-    Vectorised: every cell is classified at once, the table rows of all cells are gathered in
-    one go, and each crossed grid edge gets one global number, so that neighbouring cells share
-    their vertices and the mesh is watertight wherever the surface stays inside the volume.
+    Vectorised: the cells are classified with whole-array operations (no Python loop over
+    cells), only the cells the surface crosses are kept, the table rows of all of them are
+    gathered in one go, and each crossed grid edge gets one global number, so that neighbouring
+    cells share their vertices and the mesh is watertight wherever the surface stays inside the
+    volume. Its time and peak memory are on a par with scikit-image's compiled
+    ``skimage.measure.marching_cubes`` (``benchmarks/bench_marching_cubes.py`` measures both).
 
     Parameters
     ----------
@@ -530,8 +541,8 @@ def marching_cubes(volume, iso, spacing=(1.0, 1.0, 1.0)):
     Raises
     ------
     ValueError
-        If ``volume`` is not 3-D (or has an axis shorter than 2), ``iso`` is not a number or
-        ``spacing`` is not three positive numbers.
+        If ``volume`` is not 3-D (or has an axis shorter than 2) or holds NaN or inf, ``iso``
+        is not a number or ``spacing`` is not three positive numbers.
 
     Notes
     -----
@@ -546,53 +557,201 @@ def marching_cubes(volume, iso, spacing=(1.0, 1.0, 1.0)):
     >>> verts.shape, faces.shape          # an octahedron around the centre sample
     ((6, 3), (8, 3))
     """
-    volume, iso, spacing = _check_volume(volume, iso, spacing)
-    return _march(volume, iso, spacing, TRI_TABLE, N_TRIANGLES)
+    volume, iso, spacing = _check_volume(volume, iso, spacing, finite=False)
+    return _march(volume, iso, spacing)
 
 
-def _march(volume, iso, spacing, table, ntri):
+# --- the vectorised version: tables re-indexed for the fast case-number pass -----------------
+
+#: The fast case-number pass of :func:`marching_cubes` sets bit ``x + 2y + 4z`` for the corner at
+#: ``(x, y, z)``, which is corner order 0, 1, 3, 2, 4, 5, 7, 6 of this module: the two orders
+#: differ by swapping bits 2 <-> 3 and 6 <-> 7. ``_XYZ_TO_CASE[i]`` is the case number (this
+#: module's order) of the index ``i`` made in that order.
+_XYZ_CORNER = [int(np.flatnonzero((CORNERS == (b & 1, b >> 1 & 1, b >> 2 & 1)).all(axis=1))[0])
+               for b in range(8)]
+_XYZ_TO_CASE = np.array([sum(1 << _XYZ_CORNER[b] for b in range(8) if i >> b & 1)
+                         for i in range(256)], dtype=np.int64)
+
+#: The four cube edges along each axis: x (0, 2, 4, 6), y (1, 3, 5, 7), z (8, 9, 10, 11).
+_AXIS_EDGES = tuple(tuple(int(e) for e in np.flatnonzero(_EDGE_AXIS == ax)) for ax in range(3))
+
+
+@dataclass(frozen=True)
+class _FastTables:
+    """A triangle table re-indexed for :func:`_march` by case numbers in the corner order
+    ``x + 2y + 4z`` of :data:`_XYZ_TO_CASE` (built once, at import)."""
+
+    ntri: np.ndarray        # (256,) triangles per case
+    first: np.ndarray       # (256,) row of the case's first triangle in ``edges``
+    edges: np.ndarray       # (sum ntri, 3) cube edges of every triangle, cases one after another
+    crossed: np.ndarray     # (12, 256) whether cube edge e is crossed in case i
+
+
+def _fast_tables(table, ntri) -> _FastTables:
+    case = _XYZ_TO_CASE
+    counts = ntri[case]
+    first = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    edges = np.concatenate([table[c, :ntri[c]] for c in case]).astype(np.intp).reshape(-1, 3)
+    crossed = ((EDGE_TABLE[case][None, :] >> np.arange(12)[:, None]) & 1).astype(bool)
+    return _FastTables(counts, first, edges, crossed)
+
+
+_FAST = _fast_tables(TRI_TABLE, N_TRIANGLES)
+
+#: Cells per slab in :func:`_active_cells`: small enough for the slab's few ``uint8`` arrays to
+#: stay in the processor's cache, large enough for NumPy's per-call overhead not to matter.
+_SLAB_CELLS = 1 << 18
+#: Grids with fewer edges than this number them in ``int32`` (half the memory of ``int64``).
+_INT32_EDGES = 2 ** 31
+#: Bit shifts by 1, 2 and 4 as multiplications: NumPy vectorises ``uint8`` products, not shifts.
+_TWO, _FOUR, _SIXTEEN = np.uint8(2), np.uint8(4), np.uint8(16)
+
+
+def _active_cells(volume, iso):
+    """Flat numbers (C order) and case numbers of the cells the surface crosses, in order.
+
+    The case number of every cell comes from three passes over ``uint8`` arrays: neighbouring
+    samples are combined along x (bits 0-1), the pairs along y (bits 0-3), then along z (bits
+    0-7), bit ``x + 2y + 4z`` for the corner at ``(x, y, z)`` (the order of :data:`_FAST`).
+    The volume is swept in slabs of whole ``yz`` layers of cells: a Python loop over a few
+    dozen slabs, not over cells, which keeps every temporary small and in cache (the buffers
+    are allocated once and reused). The samples are checked for NaN and inf on the way
+    (``ValueError``, as :func:`marching_cubes` promises).
+    """
     nx, ny, nz = volume.shape
-    inside = (volume < iso).view(np.uint8)
-    # case number of every cell: bit c from corner c (uint8 keeps this pass light)
-    cell_shape = (nx - 1, ny - 1, nz - 1)
-    index = np.zeros(cell_shape, dtype=np.uint8)
-    for c, (di, dj, dk) in enumerate(CORNERS):
-        index |= inside[di:di + nx - 1, dj:dj + ny - 1, dk:dk + nz - 1] << np.uint8(c)
-    flat = index.ravel()
-    cells = np.flatnonzero((flat != 0) & (flat != 255))               # cells the surface crosses
-    cases = flat[cells].astype(np.int64)
-    counts = ntri[cases]
-    cell_rep = np.repeat(cells, counts)
-    slot = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-    local = table[np.repeat(cases, counts), slot]                     # (T, 3) cube edges
-    ijk = np.stack(np.unravel_index(cell_rep, cell_shape), axis=-1)   # (T, 3)
-    # global number of each grid edge: edges along x, then y, then z
-    axis_shapes = [tuple(n - (a == ax) for a, n in enumerate(volume.shape)) for ax in range(3)]
-    offsets = np.cumsum([0] + [int(np.prod(s)) for s in axis_shapes])
-    axis = _EDGE_AXIS[local]                                          # (T, 3)
-    start = ijk[:, None, :] + _EDGE_START[local]                      # (T, 3, 3)
-    gid = np.empty(local.shape, dtype=np.int64)
+    layer = (ny - 1) * (nz - 1)
+    step = min(max(1, _SLAB_CELLS // layer), nx - 1)
+    size = (step + 1) * ny * nz
+    size += -size % 8                                      # whole 8-byte words (see below)
+    # three buffers, allocated once, each reused as soon as its contents have been read
+    buf_a, buf_b, buf_c = (np.empty(size, dtype=np.uint8) for _ in range(3))
+    cells, cases = [], []
+    for x0 in range(0, nx - 1, step):
+        s = min(step, nx - 1 - x0)                         # layers of cells in this slab
+        block = volume[x0:x0 + s + 1]
+        finite = np.isfinite(block, out=buf_b[:block.size].view(bool).reshape(block.shape))
+        if not finite.all():
+            raise ValueError("volume must be finite (no NaN or inf)")
+        ins = np.less(block, iso, out=buf_a[:block.size].view(bool).reshape(block.shape))
+        ins = ins.view(np.uint8)
+        pairs = np.multiply(ins[1:], _TWO, out=buf_b[:s * ny * nz].reshape(s, ny, nz))
+        pairs |= ins[:-1]                                  # (s, ny, nz): bits x = 0, 1
+        quads = np.multiply(pairs[:, 1:], _FOUR,
+                            out=buf_c[:s * (ny - 1) * nz].reshape(s, ny - 1, nz))
+        quads |= pairs[:, :-1]                             # (s, ny-1, nz): bits 0-3
+        n = s * layer
+        index = np.multiply(quads[:, :, 1:], _SIXTEEN, out=buf_a[:n].reshape(s, ny - 1, nz - 1))
+        index |= quads[:, :, :-1]                          # (s, ny-1, nz-1): bits 0-7
+        flat = buf_a[:n]
+        flat -= 1                                          # 0 -> 255: active <=> below 254
+        active = buf_c.view(bool)
+        np.less(flat, 254, out=active[:n])
+        active[n:n + (-n % 8)] = False                     # pad to whole words
+        # the surface crosses few cells: find the nonzero 8-byte words first, then the cells
+        words = np.flatnonzero(active.view(np.uint64)[:(n + 7) // 8])
+        hits = np.flatnonzero(active.reshape(-1, 8)[words])
+        found = words[hits >> 3] * 8 + (hits & 7)
+        cases.append(flat[found])
+        found += x0 * layer
+        cells.append(found)
+    cells = np.concatenate(cells) if len(cells) > 1 else cells[0]
+    cases = np.concatenate(cases) if len(cases) > 1 else cases[0]
+    cases += 1
+    return cells, cases.astype(np.intp)
+
+
+def _march(volume, iso, spacing, tables=_FAST):
+    """The vectorised marching cubes of :func:`marching_cubes` (inputs already checked).
+
+    1. The active cells, those the surface crosses, and their case numbers
+       (:func:`_active_cells`); everything after works on them only.
+    2. Each edge of an active cell has a global number (x-edges, then y, then z, each in C order
+       of its first sample) = the cell's base number on that axis + a fixed offset per edge.
+       Per axis, the crossed edges of the active cells are sorted (four already sorted runs),
+       the duplicates shared by neighbouring cells merged, and the rank of each one is the
+       vertex number: vertices come out in the order of their global numbers.
+    3. The triangles of every cell are looked up, and their edges turned into vertex numbers.
+    """
+    nx, ny, nz = volume.shape
+    cells, cases = _active_cells(volume, iso)
+    m = len(cells)
+
+    shapes = ((nx - 1, ny, nz), (nx, ny - 1, nz), (nx, ny, nz - 1))
+    sizes = [a * b * c for a, b, c in shapes]
+    small = sum(sizes) < _INT32_EDGES
+    itype = np.int32 if small else np.int64
+    # the cell's (i, j, k) and its base number on each axis's grid of edges
+    i, rest = np.divmod(cells.astype(itype) if small else cells, (ny - 1) * (nz - 1))
+    j, k = np.divmod(rest, nz - 1)
+    del rest, cells
+    ij = i * ny + j
+    bases = (ij * nz + k,                                  # x-edges: (nx-1, ny, nz)
+             (i * (ny - 1) + j) * nz + k + sizes[0],       # y-edges: (nx, ny-1, nz)
+             ij * (nz - 1) + k + (sizes[0] + sizes[1]))    # z-edges: (nx, ny, nz-1)
+    del i, j, k, ij
+
+    vid = np.empty((m, 12), dtype=itype)                   # vertex number of each cell edge
+    verts_parts, nverts = [], 0
     for ax in range(3):
-        sel = axis == ax
-        gid[sel] = offsets[ax] + np.ravel_multi_index(tuple(start[sel].T), axis_shapes[ax])
-    edges, faces = np.unique(gid, return_inverse=True)
-    faces = faces.reshape(-1, 3).astype(np.int64)
-    return _edge_vertices(volume, iso, spacing, edges, offsets, axis_shapes), faces
+        _, s1, s2 = shapes[ax]
+        runs, sels = [], []
+        for e in _AXIS_EDGES[ax]:
+            di, dj, dk = _EDGE_START[e]
+            sel = np.flatnonzero(tables.crossed[e][cases])
+            runs.append(bases[ax][sel] + itype((di * s1 + dj) * s2 + dk))
+            sels.append(sel)
+        keys = np.concatenate(runs)
+        order = np.argsort(keys, kind="stable")            # merges four sorted runs
+        keys = keys[order]
+        new = np.empty(len(keys), dtype=bool)
+        new[:1] = True
+        np.not_equal(keys[1:], keys[:-1], out=new[1:])
+        rank = np.cumsum(new, dtype=itype)
+        rank += itype(nverts - 1)
+        numbers = np.empty_like(rank)
+        numbers[order] = rank
+        del order, rank
+        start = 0
+        for e, sel in zip(_AXIS_EDGES[ax], sels):
+            vid[sel, e] = numbers[start:start + len(sel)]
+            start += len(sel)
+        edges = keys[new]
+        edges -= itype(sum(sizes[:ax]))
+        del keys, new, numbers, runs, sels
+        verts_parts.append(_axis_vertices(volume, iso, spacing, edges, ax, shapes[ax]))
+        nverts += len(edges)
+    del bases
+
+    counts = tables.ntri[cases]
+    ends = np.cumsum(counts)
+    ntris = int(ends[-1]) if m else 0
+    # row of every triangle in tables.edges: its case's first row + its number within the cell
+    rows = np.repeat(tables.first[cases] - (ends - counts), counts)
+    rows += np.arange(ntris)
+    cell_edges = tables.edges[rows]                        # (T, 3) cube edges
+    del rows
+    cell_edges += np.repeat(np.arange(0, 12 * m, 12), counts)[:, None]
+    faces = np.take(vid.reshape(-1), cell_edges).astype(np.int64)
+    return np.concatenate(verts_parts), faces
 
 
-def _edge_vertices(volume, iso, spacing, edges, offsets, axis_shapes):
-    """Interpolated positions of the crossing on each global grid edge."""
+def _axis_vertices(volume, iso, spacing, edges, ax, shape):
+    """The interpolated crossing (Q3(a)) on each of the grid edges ``edges`` along axis ``ax``.
+
+    ``edges`` are numbers in C order on the grid of edges along ``ax`` (``shape``); the edge
+    runs from its first sample ``(i, j, k)`` to the next sample along ``ax``.
+    """
+    _, s1, s2 = shape
+    i, rest = np.divmod(edges, s1 * s2)
+    j, k = np.divmod(rest, s2)
+    first = (i, j, k)
+    v0 = volume[first]
+    v1 = volume[tuple(n + 1 if c == ax else n for c, n in enumerate(first))]
+    t = (iso - v0) / (v1 - v0)
     verts = np.empty((len(edges), 3))
-    for ax in range(3):
-        sel = (edges >= offsets[ax]) & (edges < offsets[ax + 1])
-        i0 = np.stack(np.unravel_index(edges[sel] - offsets[ax], axis_shapes[ax]), axis=-1)
-        i1 = i0.copy()
-        i1[:, ax] += 1
-        v0 = volume[tuple(i0.T)]
-        v1 = volume[tuple(i1.T)]
-        t = (iso - v0) / (v1 - v0)
-        p0 = i0 * spacing
-        verts[sel] = p0 + t[:, None] * ((i1 - i0) * spacing)
+    for c in range(3):
+        np.multiply(first[c], spacing[c], out=verts[:, c])
+    verts[:, ax] += t * spacing[ax]                        # i*s + t*s along the edge
     return verts
 
 

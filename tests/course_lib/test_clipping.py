@@ -558,3 +558,194 @@ def test_same_polygon_rule():
     assert same_polygon(np.zeros((0, 4)), np.zeros((0, 4))) is None
     assert same_polygon(np.zeros((0, 4)), P) is not None
     assert same_polygon(P, P.tolist()) is not None
+
+
+# ------------------------------------------------------------------------------------------------
+# the fast paths: Python floats for small polygons, NumPy for large ones, the batch API
+
+
+def naive_sutherland_hodgman(P):
+    """Textbook Sutherland-Hodgman, one vertex at a time, with the crossing written as
+    S + t (E - S): an oracle independent of the module's code (no tolerance, no shortcuts)."""
+    poly = [list(map(float, v)) for v in P]
+    for n in C.PLANES.tolist():
+        out = []
+        for i, s in enumerate(poly):
+            e = poly[(i + 1) % len(poly)]
+            ds = sum(a * b for a, b in zip(n, s))
+            de = sum(a * b for a, b in zip(n, e))
+            if ds >= 0:
+                out.append(s)
+            if ds * de < 0:
+                t = ds / (ds - de)
+                out.append([a + t * (b - a) for a, b in zip(s, e)])
+        poly = out
+        if len(poly) < 3:
+            return np.zeros((0, 4))
+    return np.array(poly)
+
+
+def random_homogeneous_polygon(rng, n, negative_w=False):
+    """A convex screen polygon around a random centre, cut by several planes, random w."""
+    ang = np.sort(rng.uniform(0, 2 * np.pi, n))
+    xy = rng.uniform(-1, 1, 2) + rng.uniform(0.3, 1.5) * np.stack([np.cos(ang), np.sin(ang)], 1)
+    z = rng.uniform(-0.4, 1.4, n)
+    w = rng.uniform(0.2, 3.0, n)
+    P = np.column_stack([xy * w[:, None], z * w, w])
+    if negative_w:
+        P[rng.integers(n)] *= -rng.uniform(0.5, 2)      # one vertex behind the eye
+    return P
+
+
+@pytest.mark.parametrize("n", [3, 4, 5, 8, 40, 300])
+def test_clip_matches_naive_oracle(n):
+    """Small (Python) and large (NumPy) polygons, w of both signs: the same vertices as the
+    textbook algorithm, in the same order."""
+    rng = np.random.default_rng(1000 + n)
+    for k in range(60 if n < 100 else 6):
+        P = random_homogeneous_polygon(rng, n, negative_w=k % 3 == 0)
+        got, ref = C.clip_polygon(P), naive_sutherland_hodgman(P)
+        assert got.shape == ref.shape
+        np.testing.assert_allclose(got, ref, rtol=1e-9, atol=1e-12 * np.abs(P).max())
+
+
+def test_clip_on_plane_vertices():
+    """Integer polygons put many vertices exactly on planes (d = 0). The oracle, having no
+    tolerance, may repeat a vertex when its rounding puts a crossing 1e-17 beyond a later
+    plane; up to such repeats (the registry's rule) the two agree."""
+    rng = np.random.default_rng(7)
+    checked = 0
+    for _ in range(400):
+        n = int(rng.integers(3, 7))
+        P = rng.integers(-3, 4, (n, 4)).astype(float)
+        if np.any(np.all(P == 0, axis=1)):
+            continue
+        ref = naive_sutherland_hodgman(P)
+        # a crossing at the 4-D origin is dropped by clip_polygon but not by the oracle
+        if len(ref) and np.any(np.all(np.abs(ref) < 1e-12, axis=1)):
+            continue
+        got = C.clip_polygon(P)
+        assert (len(got) == 0) == (len(ref) == 0)
+        if len(got):
+            assert same_polygon(ref, got) is None
+        checked += 1
+    assert checked > 300
+
+
+@SETTINGS
+@given(homogeneous_polygons(wpos=False))
+def test_python_path_equals_numpy_passes(P):
+    """clip_polygon's float path returns the very bits of six public NumPy passes
+    (clip_against_plane), including on-plane and w < 0 vertices."""
+    Q = P
+    for k in range(6):
+        Q = C.clip_against_plane(Q, k)
+        if len(Q) < 3:
+            Q = np.zeros((0, 4))
+            break
+    got = C.clip_polygon(P)
+    assert got.shape == Q.shape and got.dtype == np.float64
+    np.testing.assert_array_equal(got, Q)
+
+
+def test_clip_polygon_large_path_equals_python_path():
+    """A polygon above the size threshold goes through the NumPy passes; the float passes on
+    the same polygon give the same bits."""
+    rng = np.random.default_rng(3)
+    n = C._SMALL_POLYGON + 50
+    P = random_homogeneous_polygon(rng, n)
+    big = C.clip_polygon(P)
+    small_parts = C._clip_rows(P.tolist(), float(np.abs(P).max()))
+    np.testing.assert_array_equal(big, np.array(small_parts).reshape(-1, 4))
+
+
+def test_clip_returns_copies_and_keeps_inputs():
+    P = np.array(B_H)
+    out = C.clip_polygon(P)
+    np.testing.assert_array_equal(out, B_H)
+    assert not np.shares_memory(out, P)
+    out[0, 0] = 99.0
+    np.testing.assert_array_equal(P, B_H)
+    # ints and lists accepted, result float64
+    assert C.clip_polygon(B_H.astype(int).tolist()).dtype == np.float64
+
+
+@pytest.mark.filterwarnings("ignore:overflow encountered")
+def test_clip_huge_finite_coordinates_accepted():
+    """Coordinates near the float limit: their sum overflows, yet they are finite and valid."""
+    P = np.array([[0.0, 0.0, 1e308, 1.7e308], [1e308, 0.0, 1e308, 1.7e308],
+                  [0.0, 1e308, 1e308, 1.7e308]])
+    assert C.inside_view_volume(P).all()
+    np.testing.assert_array_equal(C.clip_polygon(P), P)
+    np.testing.assert_array_equal(C.clip_polygons([P])[0], P)
+
+
+@pytest.mark.parametrize("bad", [
+    [[0.0, 0.0, np.nan, 1.0], [1, 0, 0, 1], [0, 1, 0, 1]],
+    [[0.0, 0.0, np.inf, 1.0], [1, 0, 0, 1], [0, 1, 0, 1]],
+    [[-0.0, 0.0, 0.0, -0.0], [1, 0, 0, 1], [0, 1, 0, 1]],
+])
+def test_clip_rejects_nonfinite_and_zero_vertices(bad):
+    with pytest.raises(ValueError, match="P"):
+        C.clip_polygon(bad)
+    with pytest.raises(ValueError, match=r"polygons\[1\]"):
+        C.clip_polygons([A_H, bad])
+
+
+@SETTINGS
+@given(st.lists(homogeneous_polygons(wpos=False), min_size=1, max_size=12))
+def test_clip_polygons_equals_clip_polygon(polys):
+    got = C.clip_polygons(polys)
+    assert isinstance(got, list) and len(got) == len(polys)
+    for P, g in zip(polys, got):
+        ref = C.clip_polygon(P)
+        assert g.shape == ref.shape and g.dtype == np.float64
+        np.testing.assert_array_equal(g, ref)
+        assert not np.shares_memory(g, P)
+
+
+def test_clip_polygons_mixed_sizes_and_forms():
+    rng = np.random.default_rng(12)
+    polys = [random_homogeneous_polygon(rng, n, negative_w=n % 2 == 0)
+             for n in (3, 4, C._SMALL_POLYGON + 10, 5, 3, 9)]
+    polys.append(A_H.tolist())                  # a nested list
+    polys.append(B_H.astype(int))               # an integer array
+    got = C.clip_polygons(polys)
+    for P, g in zip(polys, got):
+        np.testing.assert_array_equal(g, C.clip_polygon(P))
+        assert g.shape == naive_sutherland_hodgman(P).shape
+    np.testing.assert_allclose(C.to_screen(got[-2]), A_CLIPPED_SCREEN, atol=1e-12)
+    np.testing.assert_array_equal(got[-1], B_H)
+    # writing into one result touches no other
+    before = [g.copy() for g in got]
+    got[0][...] = -1.0
+    for g, b in zip(got[1:], before[1:]):
+        np.testing.assert_array_equal(g, b)
+    # a (k, n, 4) array of triangles, an empty list, a generator
+    tris = np.stack([A_H, B_H, A_H])
+    assert [len(g) for g in C.clip_polygons(tris)] == [4, 3, 4]
+    assert C.clip_polygons([]) == []
+    assert [len(g) for g in C.clip_polygons(p for p in (A_H, B_H))] == [4, 3]
+
+
+def test_clip_polygons_empty_results():
+    """Polygons wholly outside, or cut down to an edge, come back as (0, 4) arrays."""
+    outside = homogeneous(A_SCREEN + [3.0, 0, 0], 2.0)              # beyond the right plane
+    edge_on = np.array([[1.0, 0, 0.5, 1], [2, 0.5, 0.5, 1], [2, -0.5, 0.5, 1]])  # touches x = w
+    behind = -np.abs(homogeneous(A_SCREEN, 1.0))                    # every w < 0
+    got = C.clip_polygons([outside, A_H, edge_on, behind])
+    assert [g.shape for g in got] == [(0, 4), (4, 4), (0, 4), (0, 4)]
+    for P in (outside, edge_on, behind):
+        assert C.clip_polygon(P).shape == (0, 4)
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: C.clip_polygons([A_H, np.ones((2, 4))]), r"polygons\[1\].*at least 3"),
+    (lambda: C.clip_polygons([A_H, np.ones((3, 3))]), r"polygons\[1\].*shape"),
+    (lambda: C.clip_polygons([A_H, "abc"]), r"polygons\[1\]"),
+    (lambda: C.clip_polygons([[[0, 0, np.nan, 1]] * 3, np.ones((2, 4))]), r"polygons\[0\].*finite"),
+    (lambda: C.clip_polygons(np.ones((4, 4))), r"polygons\[0\]"),
+])
+def test_clip_polygons_value_errors(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()

@@ -368,6 +368,76 @@ def test_vectorised_equals_loop():
         assert np.array_equal(mesh.canonical_triangles(v1, f1), mesh.canonical_triangles(v2, f2))
 
 
+def _two_sided_noise(shape, seed, iso=0.25):
+    """Random samples at least 0.2 above or below ``iso``: a crossing on an edge then sits at
+    ``t`` in [0.1, 0.9], many cells are ambiguous and the surface reaches the volume's faces."""
+    rng = np.random.default_rng(seed)
+    return iso + rng.choice([-1.0, 1.0], shape) * rng.uniform(0.2, 1.0, shape)
+
+
+def _in_global_edge_order(verts, faces, spacing):
+    """Vertices renumbered by the grid edge they lie on: x-edges, then y, then z, each in C
+    order of the edge's first sample (the order :func:`mc.marching_cubes` documents). The edge
+    is read off the coordinates: two are whole multiples of the spacing, the third is not."""
+    q = verts / np.asarray(spacing, dtype=float)
+    whole = np.isclose(q, np.round(q), rtol=0, atol=1e-9)
+    assert np.all(whole.sum(axis=1) == 2)           # every vertex strictly inside one edge
+    axis = np.argmin(whole, axis=1)
+    start = np.floor(q + 1e-9).astype(np.int64)
+    order = np.lexsort((start[:, 2], start[:, 1], start[:, 0], axis))
+    renumber = np.empty(len(verts), dtype=np.int64)
+    renumber[order] = np.arange(len(verts))
+    return verts[order], renumber[faces]
+
+
+@pytest.mark.parametrize("shape, seed, spacing", [
+    ((7, 6, 5), 0, (1.0, 1.0, 1.0)),
+    ((6, 7, 4), 1, (0.5, 2.0, 1.5)),
+    ((2, 9, 3), 2, (1.0, 0.25, 3.0)),
+    ((8, 2, 2), 3, (2.0, 1.0, 1.0)),
+])
+def test_vectorised_equals_loop_exactly(shape, seed, spacing, monkeypatch):
+    """Same vertices in the documented order, same faces in the same order and winding, on
+    noise (ambiguous cells everywhere, surface through the volume's faces); with slabs of one
+    layer of cells and int64 edge numbers too, the paths large volumes take."""
+    vol = _two_sided_noise(shape, seed)
+    v_loop, f_loop = _in_global_edge_order(*mc.marching_cubes_loop(vol, 0.25, spacing), spacing)
+    assert len(f_loop) > 10
+    results = [mc.marching_cubes(vol, 0.25, spacing)]
+    monkeypatch.setattr(mc, "_SLAB_CELLS", 1)
+    results.append(mc.marching_cubes(vol, 0.25, spacing))
+    monkeypatch.setattr(mc, "_INT32_EDGES", 0)
+    results.append(mc.marching_cubes(vol, 0.25, spacing))
+    for verts, faces in results:
+        assert verts.dtype == np.float64 and faces.dtype == np.int64
+        np.testing.assert_allclose(verts, v_loop, rtol=0, atol=1e-12)
+        assert np.array_equal(faces, f_loop)
+
+
+def test_vectorised_accepts_any_layout_and_dtype():
+    """Fortran order, a strided view, integers and float32 give the mesh of a C-ordered float64
+    copy of the same samples."""
+    vol = _two_sided_noise((9, 8, 7), seed=4)
+    views = [np.asfortranarray(vol), vol[::-1, :, ::2], np.round(4 * vol).astype(np.int16),
+             vol.astype(np.float32)]
+    for view in views:
+        expected = mc.marching_cubes(np.array(view, dtype=np.float64, order="C"), 0.25)
+        got = mc.marching_cubes(view, 0.25)
+        assert np.array_equal(got[0], expected[0]) and np.array_equal(got[1], expected[1])
+        assert len(got[1]) > 0
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_non_finite_sample_anywhere_is_rejected(bad, monkeypatch):
+    monkeypatch.setattr(mc, "_SLAB_CELLS", 16)            # several slabs; the bad one is last
+    vol = np.zeros((12, 5, 6))
+    vol[-1, 4, 5] = bad
+    with pytest.raises(ValueError, match="finite"):
+        mc.marching_cubes(vol, 0.5)
+    with pytest.raises(ValueError, match="finite"):
+        mc.marching_cubes_loop(vol, 0.5)
+
+
 @pytest.mark.parametrize("spacing", [(1.0, 1.0, 1.0), (0.5, 1.0, 2.0)])
 @pytest.mark.parametrize("seed", [0, 1])
 def test_vertices_match_skimage_on_smooth_fields(spacing, seed):
