@@ -663,6 +663,10 @@ def _clip_rows(V, size):
     times a bound on every vertex's size (crossings are convex combinations of vertices, so
     twice ``size`` bounds theirs too, rounding included); otherwise their outcome is known.
     """
+    # Wholly inside (the usual case in a scene): every pass would be skipped. The comparisons
+    # are exact: x + w rounds to a negative number exactly when x < -w, and so on.
+    if all(-w <= x <= w and -w <= y <= w and 0.0 <= z <= w for x, y, z, w in V):
+        return V
     rtol = _ON_PLANE_RTOL
     thr = rtol * (2.0 * size)
     for k in range(6):
