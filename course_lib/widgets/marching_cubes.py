@@ -26,6 +26,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from .. import marching_cubes as mc
+from ._view import FigureView
 from ..plots.marching_cubes import case_values, draw_case, update_case
 
 __all__ = ["CaseExplorer", "case_explorer", "case_summary"]
@@ -73,7 +74,7 @@ class CaseExplorer:
         if not 0.0 < iso < 1.0:
             raise ValueError(f"iso must lie strictly between 0 and 1, got {iso}")
         self._syncing = False
-        self._output = None
+        self._view = FigureView()
         self._layout = None
 
         self.case = W.Dropdown(
@@ -168,25 +169,13 @@ class CaseExplorer:
     # display
 
     def _redraw(self):
-        if self._output is not None:
-            from IPython.display import display
-
-            with self._output:
-                self._output.clear_output(wait=True)
-                display(self.fig)
-        else:
-            self.fig.canvas.draw_idle()
+        self._view.redraw(self.fig)
 
     @property
     def widget(self):
         """The explorer's layout: the figure beside the controls."""
         if self._layout is None:
-            canvas = self.fig.canvas
-            if isinstance(canvas, W.DOMWidget):  # ipympl
-                view = canvas
-            else:  # inline backend: redraw the figure into an Output widget
-                self._output = W.Output()
-                view = self._output
+            view = self._view.widget(self.fig)
             controls = W.VBox([self.case, self.index,
                                W.HBox([W.Label("inside corners")] + self.corners),
                                self.alternative, self.iso, self.info],

@@ -31,6 +31,7 @@ import numpy as np
 
 from .. import shading
 from ..plots.shading import sphere_pair, update_sphere_pair
+from ._view import FigureView
 from ..plotting import new_figure
 
 __all__ = ["PhongExplorer", "angles", "direction", "hex_to_rgb", "phong_explorer", "rgb_to_hex"]
@@ -131,7 +132,7 @@ class PhongExplorer:
         self.peaks = [None, None]
         self.probe_values = {"phong": None, "blinn": None}
         self._layout = None
-        self._output = None
+        self._view = FigureView()
         self._holding = False
         self._exam_mode = False
 
@@ -277,25 +278,13 @@ class PhongExplorer:
     # display
 
     def _redraw(self):
-        if self._output is not None:
-            from IPython.display import display
-
-            with self._output:
-                self._output.clear_output(wait=True)
-                display(self.fig)
-        else:
-            self.fig.canvas.draw_idle()
+        self._view.redraw(self.fig)
 
     @property
     def widget(self):
         """The explorer's layout: the two spheres above the controls and the readout."""
         if self._layout is None:
-            canvas = self.fig.canvas
-            if isinstance(canvas, W.DOMWidget):  # ipympl
-                view = canvas
-            else:  # inline backend: redraw the figure into an Output widget
-                self._output = W.Output()
-                view = self._output
+            view = self._view.widget(self.fig)
             left = W.VBox([self.ka, self.kd, self.ks, self.n, self.colour])
             right = W.VBox([self.light_azimuth, self.light_elevation, self.view_azimuth,
                             self.view_elevation, self.exam_button])

@@ -28,6 +28,7 @@ import numpy as np
 
 from .. import splines
 from ..plots.splines import EXAMPLE_POINTS, draw_curve, spline_scene, update_curve
+from ._view import FigureView
 from ..plotting import new_figure
 
 __all__ = ["SplineEndExplorer", "combination_tex", "formulas_html", "spline_end_explorer"]
@@ -129,7 +130,7 @@ class SplineEndExplorer:
         self.phantoms = splines.extend_with_phantoms(self.points, "d=2c-b")[[0, -1]]
         self._drag = None
         self._syncing = False
-        self._output = None
+        self._view = FigureView()
         self._layout = None
 
         lo, hi = self.points.min(axis=0), self.points.max(axis=0)
@@ -308,25 +309,13 @@ class SplineEndExplorer:
     # display
 
     def _redraw(self):
-        if self._output is not None:
-            from IPython.display import display
-
-            with self._output:
-                self._output.clear_output(wait=True)
-                display(self.fig)
-        else:
-            self.fig.canvas.draw_idle()
+        self._view.redraw(self.fig)
 
     @property
     def widget(self):
         """The explorer's layout: the figure beside the controls and the formulas."""
         if self._layout is None:
-            canvas = self.fig.canvas
-            if isinstance(canvas, W.DOMWidget):  # ipympl
-                view = canvas
-            else:  # inline backend: redraw the figure into an Output widget
-                self._output = W.Output()
-                view = self._output
+            view = self._view.widget(self.fig)
             controls = W.VBox([self.kind, self.rule, self.point, self.x, self.y,
                                self.show_hull, self.formulas, self.status])
             self._layout = W.HBox([view, controls])
