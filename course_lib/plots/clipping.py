@@ -82,9 +82,9 @@ def plot_view_volume(ax=None, label_axes: bool = True):
         ax.set_xlabel(AXIS_LABELS[0])
         ax.set_ylabel(AXIS_LABELS[1])
         ax.set_zlabel(AXIS_LABELS[2])
-        ax.text(-1.1, -1.1, 0.0, "near $z_s=0$", fontsize=8, ha="right",
+        ax.text(0.0, -1.25, 0.0, "near $z_s=0$", fontsize=8, ha="center",
                 color=COLOURS["reference"])
-        ax.text(-1.1, -1.1, 1.0, "far $z_s=1$", fontsize=8, ha="right", color=COLOURS["hull"])
+        ax.text(0.0, -1.25, 1.0, "far $z_s=1$", fontsize=8, ha="center", color=COLOURS["hull"])
     ax.set_box_aspect((2, 2, 1))
     return {"edges": edges, "near": near, "far": far}
 
