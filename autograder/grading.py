@@ -180,6 +180,9 @@ def read_submission(folder: Path, student: str, notebook: str,
     """Read ``folder/<notebook>.ipynb`` without trusting it; never raises."""
     path = folder / f"{notebook}.ipynb"
     sub = Submission(student, notebook, path)
+    if folder.is_symlink():  # e.g. a link to another student's folder: nothing of theirs
+        return _unreadable(sub, f"the {folder.name} folder of the submission is a symbolic "
+                                "link, not a folder of files")
     if not folder.is_dir():
         sub.status, sub.message = "missing", (
             f"no {notebook}.ipynb was submitted (there is no {ASSIGNMENT} folder in your "

@@ -16,7 +16,10 @@ every (student, notebook, graded name) it calls :func:`run_job`, which starts a 
 3. installs an audit hook (:pep:`578`) that denies opening files outside the scratch directory and
    Python's own libraries (so the course's sources, the registry and other submissions cannot be
    read even when the uid cannot be dropped), starting processes, sending signals, sockets and
-   ``ctypes``; ``sys.exit``/``os._exit`` become ordinary exceptions;
+   ``ctypes``; ``sys.exit``/``os._exit`` become ordinary exceptions. The hook calls no code the
+   student can patch (no ``builtins`` lookups, no ``posixpath``; only exact ``str``/``bytes``
+   paths) and keeps its configuration out of reach (``gc`` introspection, tracing and changing
+   a function's defaults are denied); the builtins are restored after every cell and case;
 4. executes the student's solution cells in notebook order (IPython magics and shell lines
    removed), each under a time limit, so one broken cell costs only what depends on it;
 5. calls the graded function on each case under a per-case time limit and *streams* each
@@ -962,10 +965,10 @@ def _child_main(scratch: str, fd: int | None = None,
 
     import posix
 
+    hook = _make_audit_hook(scratch, spec["deny_paths"])
     os._exit = posix._exit = blocked_exit
     os.abort = posix.abort = blocked_exit
 
-    hook = _make_audit_hook(scratch, spec["deny_paths"])
     if drop:  # started as root: become the sandbox uid before any student code runs
         uid, gid = (int(x) for x in drop.split(":"))
         os.setgroups([])
@@ -981,6 +984,15 @@ def _child_main(scratch: str, fd: int | None = None,
     except (ImportError, AttributeError):
         pass
     sys.addaudithook(hook)
+    del hook  # nothing the student's code can reach refers to the hook any more
+
+    # the student may rebind builtins (``builtins.type = ...``): the grading code below uses
+    # them too, so they are put back after every cell and every case
+    import builtins
+
+    builtins_dict = builtins.__dict__
+    saved_builtins = dict(builtins_dict)
+    restore_builtins = builtins_dict.update
 
     def on_alarm(signum, frame):
         raise CaseTimeout("time limit")
@@ -999,6 +1011,7 @@ def _child_main(scratch: str, fd: int | None = None,
                 exec(code, ns)
             finally:
                 setitimer(signal.ITIMER_REAL, 0)
+                restore_builtins(saved_builtins)
         except CaseTimeout:
             emit({"ev": "note", "text": f"cell {label}: stopped after {case_timeout:g} s "
                                         "(an endless loop at its top level?)"})
@@ -1062,6 +1075,7 @@ def _child_main(scratch: str, fd: int | None = None,
                 value = func(*args, **kwargs) if kind == "function" else func
             finally:
                 setitimer(signal.ITIMER_REAL, 0)
+                restore_builtins(saved_builtins)
             ev["kind"] = "returned"
         except CaseTimeout:
             ev["kind"] = "timeout"
@@ -1117,11 +1131,24 @@ def _safe_str(exc: BaseException, cap: int) -> str:  # pragma: no cover - runs i
 
 def _make_audit_hook(scratch: str, deny: list[str]):  # pragma: no cover - runs in the child
     """The audit hook that denies file access outside the scratch dir and Python's libraries,
-    processes, signals, sockets and ctypes (once added, an audit hook cannot be removed)."""
+    processes, signals, sockets and ctypes (once added, an audit hook cannot be removed).
+
+    The hook runs in the student's process, so it trusts nothing the student can change: it
+    calls no Python-level library code (its own path resolution uses ``os.lstat`` and
+    ``os.readlink`` captured now, before any student code), looks up no builtins at call time
+    (``builtins.isinstance = ...`` changes nothing), accepts only exact ``str``/``bytes``/``int``
+    paths (a path-like object or a ``str`` subclass could answer differently when the hook
+    looks and when the file is opened), and denies the introspection that would reach its
+    configuration (``gc.get_objects``/``get_referrers``, tracing and profiling hooks, other
+    threads' frames)."""
+    import stat as _stat
     import sysconfig
 
     realpath = os.path.realpath
-    fsdecode = os.fsdecode
+    lstat, readlink, getcwd = os.lstat, os.readlink, os.getcwd
+    s_islnk = _stat.S_ISLNK
+    str_t, bytes_t, int_t = str, bytes, int
+    perm_error, os_error, len_ = PermissionError, OSError, len
     scratch = realpath(scratch)
     read_roots = {scratch}
     for scheme_paths in (sysconfig.get_paths(), sysconfig.get_paths(
@@ -1130,25 +1157,78 @@ def _make_audit_hook(scratch: str, deny: list[str]):  # pragma: no cover - runs 
             if scheme_paths.get(key):
                 read_roots.add(realpath(scheme_paths[key]))
     read_roots = tuple(r.rstrip(os.sep) + os.sep for r in read_roots)
-    read_files = {"/dev/null", "/dev/urandom", "/dev/random", "/dev/zero", "/etc/localtime"}
+    read_files = frozenset({"/dev/null", "/dev/urandom", "/dev/random", "/dev/zero",
+                            "/etc/localtime"})
     deny_roots = tuple(realpath(d).rstrip(os.sep) + os.sep for d in deny)
     scratch_root = scratch.rstrip(os.sep) + os.sep
     write_flags = os.O_WRONLY | os.O_RDWR | os.O_CREAT | os.O_TRUNC | os.O_APPEND
 
-    def allowed(path, write) -> bool:
-        if isinstance(path, int):
+    # Every function below takes what it uses as positional defaults, never from a closure or
+    # the module's globals: a frame the student reaches (through a traceback of the
+    # PermissionError the hook raises) shows only immutable values, and changing a function's
+    # defaults is itself an audited (denied) event.
+    def resolve(path, lstat=lstat, readlink=readlink, getcwd=getcwd, s_islnk=s_islnk,
+                os_error=os_error):
+        """``os.path.realpath`` of an exact str from C functions only (None: a link loop)."""
+        if not path.startswith("/"):
+            path = getcwd() + "/" + path
+        out = []
+        todo = path.split("/")
+        todo.reverse()
+        links = 0
+        while todo:
+            comp = todo.pop()
+            if comp == "" or comp == ".":
+                continue
+            if comp == "..":
+                if out:
+                    out.pop()
+                continue
+            cand = "/" + "/".join(out) + ("/" if out else "") + comp
+            try:
+                st = lstat(cand)
+            except os_error:
+                out.append(comp)
+                continue
+            if s_islnk(st.st_mode):
+                links += 1
+                if links > 40:
+                    return None
+                target = readlink(cand)
+                if target.startswith("/"):
+                    out = []
+                more = target.split("/")
+                more.reverse()
+                todo.extend(more)
+                continue
+            out.append(comp)
+        return "/" + "/".join(out)
+
+    def allowed(path, write, resolve=resolve, type_=type, int_t=int_t, str_t=str_t,
+                bytes_t=bytes_t, error_t=Exception, scratch=scratch, scratch_root=scratch_root,
+                deny_roots=deny_roots, read_roots=read_roots, read_files=read_files) -> bool:
+        t = type_(path)
+        if t is int_t:
             return True
-        try:
-            p = realpath(fsdecode(path))
-        except (TypeError, ValueError):
+        if t is bytes_t:
+            try:
+                path = bytes_t.decode(path, "utf-8", "surrogateescape")
+            except error_t:
+                return False
+        elif t is not str_t:  # a path-like object or a str subclass could lie
+            return False
+        if not path.startswith("/") and ".." in path.split("/"):
+            return False  # it may be relative to a dir_fd the hook cannot see
+        p = resolve(path)
+        if p is None:
             return False
         if p == scratch or p.startswith(scratch_root):
             return True
         if write:
             return p == "/dev/null"
-        if p + os.sep in deny_roots or p.startswith(deny_roots):
+        if p + "/" in deny_roots or p.startswith(deny_roots):
             return False
-        return p in read_files or p.startswith(read_roots) or p + os.sep in read_roots
+        return p in read_files or p.startswith(read_roots) or p + "/" in read_roots
 
     blocked = frozenset({
         "os.system", "os.exec", "os.posix_spawn", "os.spawn", "os.fork", "os.forkpty",
@@ -1160,37 +1240,48 @@ def _make_audit_hook(scratch: str, deny: list[str]):  # pragma: no cover - runs 
         "os.chroot", "_posixsubprocess.fork_exec", "mmap.__new__", "winreg.OpenKey",
         "resource.setrlimit", "resource.prlimit", "signal.pthread_kill",
         "sqlite3.connect", "sqlite3.connect/handle", "sqlite3.enable_load_extension",
-        "sqlite3.load_extension", "os.add_dll_directory",
+        "sqlite3.load_extension", "os.add_dll_directory", "os.chdir",
+        # introspection that would reach this hook's configuration
+        "gc.get_objects", "gc.get_referrers", "gc.get_referents", "sys.settrace",
+        "sys.setprofile", "sys._current_frames", "sys._current_exceptions",
+        "sys.monitoring.register_callback",
     })
     write_events = frozenset({
         "os.remove", "os.rename", "os.mkdir", "os.rmdir", "os.symlink", "os.link",
         "os.truncate", "os.chmod", "os.chown", "os.utime", "os.chflags", "os.lchown",
         "shutil.rmtree", "shutil.move", "os.mkfifo", "os.mknod",
     })
-    read_events = frozenset({"os.listdir", "os.scandir", "glob.glob", "os.chdir",
+    read_events = frozenset({"os.listdir", "os.scandir", "glob.glob",
                              "shutil.copyfile", "os.listxattr", "os.getxattr"})
+    function_t = type(resolve)
 
-    def hook(event, args):
+    def hook(event, args, allowed=allowed, blocked=blocked, write_events=write_events,
+             read_events=read_events, type_=type, len_=len_, str_t=str_t, int_t=int_t,
+             function_t=function_t, perm_error=perm_error, write_flags=write_flags):
         if event == "open":
             path = args[0]
-            mode = args[1] if len(args) > 1 else None
-            flags = args[2] if len(args) > 2 else 0
-            write = bool((isinstance(mode, str) and any(c in mode for c in "wax+"))
-                         or (isinstance(flags, int) and flags & write_flags))
+            mode = args[1] if len_(args) > 1 else None
+            flags = args[2] if len_(args) > 2 else 0
+            write = ((type_(mode) is str_t and ("w" in mode or "a" in mode or "x" in mode
+                                                or "+" in mode))
+                     or (type_(flags) is int_t and flags & write_flags != 0))
             if not allowed(path, write):
-                raise PermissionError(f"reading or writing {fsdecode(path)!r} is not allowed "
-                                      "while grading")
+                raise perm_error("opening this file is not allowed while grading")
         elif event in blocked:
-            raise PermissionError(f"{event} is not allowed while grading")
+            raise perm_error(event + " is not allowed while grading")
+        elif event == "object.__setattr__":
+            if args and type_(args[0]) is function_t:   # __code__, __defaults__...
+                raise perm_error("changing a function's code or defaults is not allowed "
+                                 "while grading")
         elif event in write_events:
             for a in args[:2]:
-                if isinstance(a, (str, bytes, os.PathLike)) and not allowed(a, True):
-                    raise PermissionError(f"{event} outside the working directory is not "
-                                          "allowed while grading")
+                if a is not None and not allowed(a, True):
+                    raise perm_error(event + " outside the working directory is not allowed "
+                                     "while grading")
         elif event in read_events:
             a = args[0] if args else None
-            if isinstance(a, (str, bytes, os.PathLike)) and not allowed(a, False):
-                raise PermissionError(f"{event} of {fsdecode(a)!r} is not allowed while grading")
+            if a is not None and not allowed(a, False):
+                raise perm_error(event + " is not allowed while grading")
 
     return hook
 
