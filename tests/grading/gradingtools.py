@@ -187,3 +187,22 @@ def read_grades(out: Path) -> dict[tuple[str, str, str], dict]:
     with open(out / "grades.csv", newline="", encoding="utf-8") as f:
         rows = list(csv.DictReader(f))
     return {(r["student"], r["notebook"], r["grade_id"]): r for r in rows}
+
+
+def expect_full_marks(src) -> dict[str, tuple]:
+    """Full marks everywhere: (score, status) per grade_id; manual cells wait for a human."""
+    exp = {tid: (pts, "ok") for _, tid, pts in src.graded}
+    exp.update({gid: (None, "manual") for gid, _ in src.manual})
+    return exp
+
+
+def expect_all(src, status) -> dict[str, tuple]:
+    """0 with ``status`` for every graded and manual cell (a notebook that cannot be graded)."""
+    exp = {tid: (0.0, status) for _, tid, _ in src.graded}
+    exp.update({gid: (0.0, status) for gid, _ in src.manual})
+    return exp
+
+
+def points_of(src, name) -> float:
+    """The points of graded name ``name``'s test cell in the source notebook."""
+    return next(p for n, _, p in src.graded if n == name)

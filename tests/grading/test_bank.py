@@ -25,7 +25,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
-from gradingtools import (CASE_TIMEOUT, SECRET, append_cell, cases_of, cell_index,
+from gradingtools import (expect_all, expect_full_marks, points_of,
+                          CASE_TIMEOUT, SECRET, append_cell, cases_of, cell_index,
                           course_sources, model_version, read_grades, release_version,
                           run_grade, target_of, write_nb)
 
@@ -48,26 +49,15 @@ class Ctx:
     secret: Path
 
 
-def _ok(src) -> dict[str, tuple]:
-    """Full marks everywhere: (score, status) per grade_id; manual cells wait for a human."""
-    exp = {tid: (pts, "ok") for _, tid, pts in src.graded}
-    exp.update({gid: (None, "manual") for gid, _ in src.manual})
-    return exp
 
 
-def _all(src, status) -> dict[str, tuple]:
-    exp = {tid: (0.0, status) for _, tid, _ in src.graded}
-    exp.update({gid: (0.0, status) for gid, _ in src.manual})
-    return exp
 
 
-def _points(src, name) -> float:
-    return next(p for n, _, p in src.graded if n == name)
 
 
 def _with_target(status, score=0.0):
     def expect(src, ctx):
-        exp = _ok(src)
+        exp = expect_full_marks(src)
         exp[f"test_{target_of(src)}"] = (score, status)
         return exp
     return expect
@@ -351,9 +341,9 @@ def _partial_expect(src, ctx):
     name = target_of(src)
     cases = cases_of(ctx.student, name)
     raising = sum(c.raises is not None and issubclass(ValueError, c.raises) for c in cases)
-    exp = _ok(src)
+    exp = expect_full_marks(src)
     status = "ok" if raising == len(cases) else "error"
-    exp[f"test_{name}"] = (_points(src, name) * raising / len(cases), status)
+    exp[f"test_{name}"] = (points_of(src, name) * raising / len(cases), status)
     return exp
 
 
@@ -363,17 +353,17 @@ def _crash_expect(src, ctx):
     name = target_of(src)
     n = len(cases_of(ctx.student, name))
     passed = sum(1 for i in range(n) if i < 9 and i % 3 != 2)
-    exp = _ok(src)
-    exp[f"test_{name}"] = (_points(src, name) * passed / n, "error" if passed < n else "ok")
+    exp = expect_full_marks(src)
+    exp[f"test_{name}"] = (points_of(src, name) * passed / n, "error" if passed < n else "ok")
     return exp
 
 
 def _tamper_expect(src, ctx):
-    return _ok(src)
+    return expect_full_marks(src)
 
 
 def _strip_expect(src, ctx):
-    exp = _ok(src)
+    exp = expect_full_marks(src)
     exp.update({gid: (0.0, "missing") for gid, _ in src.manual})
     return exp
 
@@ -389,13 +379,13 @@ ADVERSARIES: dict[str, Adversary] = {
     "adv_reference": Adversary(_edit(_reference_call), _with_target("reference-used")),
     "adv_reference_import": Adversary(_edit(_reference_from_import),
                                       _with_target("reference-used")),
-    "adv_snoop": Adversary(_edit(_snoop), lambda src, ctx: _ok(src)),
+    "adv_snoop": Adversary(_edit(_snoop), lambda src, ctx: expect_full_marks(src)),
     # tampering with the notebook itself
     "adv_edit_tests": Adversary(_edit(_edit_tests), _with_target("failed")),
     "adv_metadata": Adversary(_edit(_tamper_metadata), _tamper_expect,
                               message={"target": "metadata"}),
     "adv_stripped": Adversary(_edit(_strip_metadata), _strip_expect),
-    "adv_duplicated": Adversary(_edit(_duplicate), lambda src, ctx: _ok(src),
+    "adv_duplicated": Adversary(_edit(_duplicate), lambda src, ctx: expect_full_marks(src),
                                 message={"target": "appears 2 times"}),
     "adv_deleted_cell": Adversary(_edit(_delete_solution), _with_target("missing")),
     # processes that misbehave
@@ -410,24 +400,24 @@ ADVERSARIES: dict[str, Adversary] = {
     "adv_partial": Adversary(_target_code(ALWAYS_VALUEERROR, keep_model=False),
                              _partial_expect),
     # noise that must not cost anything
-    "adv_flood": Adversary(_target_code(PRINT_FLOOD), lambda src, ctx: _ok(src)),
-    "adv_warnings": Adversary(_target_code(WARNINGS), lambda src, ctx: _ok(src)),
-    "adv_widgets": Adversary(_edit(_widgets), lambda src, ctx: _ok(src)),
-    "adv_huge_output": Adversary(_edit(_huge_output), lambda src, ctx: _ok(src)),
+    "adv_flood": Adversary(_target_code(PRINT_FLOOD), lambda src, ctx: expect_full_marks(src)),
+    "adv_warnings": Adversary(_target_code(WARNINGS), lambda src, ctx: expect_full_marks(src)),
+    "adv_widgets": Adversary(_edit(_widgets), lambda src, ctx: expect_full_marks(src)),
+    "adv_huge_output": Adversary(_edit(_huge_output), lambda src, ctx: expect_full_marks(src)),
     # files that cannot be graded
     "adv_invalid_json": Adversary(
         lambda src, ctx: {f"{src.name}.ipynb": json.dumps(model_version(src))[:-200]},
-        lambda src, ctx: _all(src, "unreadable")),
-    "adv_old_nbformat": Adversary(_old_format, lambda src, ctx: _all(src, "unreadable")),
+        lambda src, ctx: expect_all(src, "unreadable")),
+    "adv_old_nbformat": Adversary(_old_format, lambda src, ctx: expect_all(src, "unreadable")),
     "adv_not_a_notebook": Adversary(lambda src, ctx: {f"{src.name}.ipynb": b"\x89PNG\r\n\x00"},
-                                    lambda src, ctx: _all(src, "unreadable")),
-    "adv_missing": Adversary(lambda src, ctx: {}, lambda src, ctx: _all(src, "missing")),
+                                    lambda src, ctx: expect_all(src, "unreadable")),
+    "adv_missing": Adversary(lambda src, ctx: {}, lambda src, ctx: expect_all(src, "missing")),
     "adv_misnamed": Adversary(
         lambda src, ctx: {f"{src.name}-Copy1.ipynb": model_version(src)},
-        lambda src, ctx: _all(src, "missing"), message={"all": "-Copy1.ipynb"}),
+        lambda src, ctx: expect_all(src, "missing"), message={"all": "-Copy1.ipynb"}),
     "adv_oversize": Adversary(
         lambda src, ctx: {f"{src.name}.ipynb": b"{" + b" " * (26 * 2**20) + b"}"},
-        lambda src, ctx: _all(src, "unreadable"), all_notebooks=False),
+        lambda src, ctx: expect_all(src, "unreadable"), all_notebooks=False),
 }
 
 PAIRS = [(adv, nb) for adv, a in ADVERSARIES.items()

@@ -46,7 +46,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from gradingtools import (SECRET, append_cell, cases_of, cell_index, course_sources,
+from gradingtools import (expect_all, expect_full_marks, points_of,
+                          SECRET, append_cell, cases_of, cell_index, course_sources,
                           model_version, read_grades, run_grade, target_of, write_nb)
 
 from autograder.exercises import REGISTRY
@@ -57,20 +58,10 @@ _ALL = course_sources()
 SRC = _ALL[0] if _ALL else None
 
 
-def _points(src, name) -> float:
-    return next(p for n, _, p in src.graded if n == name)
 
 
-def _ok(src) -> dict[str, tuple]:
-    exp = {tid: (pts, "ok") for _, tid, pts in src.graded}
-    exp.update({gid: (None, "manual") for gid, _ in src.manual})
-    return exp
 
 
-def _all(src, status) -> dict[str, tuple]:
-    exp = {tid: (0.0, status) for _, tid, _ in src.graded}
-    exp.update({gid: (0.0, status) for gid, _ in src.manual})
-    return exp
 
 
 def _raising_fraction(student: str, name: str) -> tuple[int, int]:
@@ -84,12 +75,12 @@ def _target_status(status, score_of=None):
     bad-input cases (the honest model raises before the attack returns), unless ``score_of``."""
     def expect(src, student):
         name = target_of(src)
-        exp = _ok(src)
+        exp = expect_full_marks(src)
         if score_of is not None:
             score = score_of(src, student)
         else:
             raising, n = _raising_fraction(student, name)
-            score = _points(src, name) * raising / n
+            score = points_of(src, name) * raising / n
         exp[f"test_{name}"] = (score, status)
         return exp
     return expect
@@ -373,8 +364,8 @@ ATTACKS: dict[str, Attack] = {
     "rt_lying_float": Attack(_wrap(LIAR), _target_status("rejected-output")),
     "rt_generator": Attack(_wrap(GENERATOR), _target_status("rejected-output")),
     "rt_nan": Attack(_wrap(NAN), _target_status("failed")),
-    "rt_zero_d": Attack(_wrap(ZERO_D), lambda src, s: _ok(src)),
-    "rt_mutate_inputs": Attack(_wrap(MUTATE), lambda src, s: _ok(src)),
+    "rt_zero_d": Attack(_wrap(ZERO_D), lambda src, s: expect_full_marks(src)),
+    "rt_mutate_inputs": Attack(_wrap(MUTATE), lambda src, s: expect_full_marks(src)),
     "rt_type_override": Attack(_wrap(TYPE_OVERRIDE), _target_status("rejected-output")),
     "rt_steal_isinstance": Attack(_append(_fill_path(STEAL_ISINSTANCE)),
                                   _target_status("failed", _zero)),
@@ -391,15 +382,15 @@ ATTACKS: dict[str, Attack] = {
     "rt_forge_manifest": Attack(_wrap(FORGE), _target_status("rejected-output", _zero)),
     "rt_ignore_alarm": Attack(_wrap(IGNORE_ALARM), _target_status("timeout", _zero)),
     "rt_recursion": Attack(_wrap(RECURSION), _target_status("error", _zero)),
-    "rt_untagged_override": Attack(_untagged_override, lambda src, s: _ok(src)),
+    "rt_untagged_override": Attack(_untagged_override, lambda src, s: expect_full_marks(src)),
     "rt_exec_only": Attack(_exec_only, _target_status("missing", _zero)),
-    "rt_zero_width_ids": Attack(_zero_width, lambda src, s: _ok(src)),
+    "rt_zero_width_ids": Attack(_zero_width, lambda src, s: expect_full_marks(src)),
     "rt_source_numbers": Attack(_source_numbers, _target_status("missing", _zero)),
-    "rt_cells_dict": Attack(_cells_dict, lambda src, s: _all(src, "unreadable")),
-    "rt_big_metadata": Attack(_big_metadata, lambda src, s: _ok(src)),
+    "rt_cells_dict": Attack(_cells_dict, lambda src, s: expect_all(src, "unreadable")),
+    "rt_big_metadata": Attack(_big_metadata, lambda src, s: expect_full_marks(src)),
     # special layouts, built in the fixture
-    "rt_symlink_folder": Attack(None, lambda src, s: _all(src, "unreadable")),
-    "rt_symlink_passwd": Attack(None, lambda src, s: _all(src, "unreadable")),
+    "rt_symlink_folder": Attack(None, lambda src, s: expect_all(src, "unreadable")),
+    "rt_symlink_passwd": Attack(None, lambda src, s: expect_all(src, "unreadable")),
 }
 ODD_IDS = ["bad id;rm -rf", "-rf", "\u00fcn\u00efc\u00f6de", ".hidden"]
 
