@@ -1,0 +1,375 @@
+"""The collimator explorer of Q2(c)-(d): which holes pass photons, and how sharp is the image.
+
+:class:`CollimatorExplorer` shows a parallel-hole collimator built like the one of Q2(d): a
+centre hole and rings of ``8k`` holes ``k * pitch`` from the axis, on a face whose radius is one
+pitch beyond the last ring, with an on-axis point source a distance ``z`` in front of it.
+Sliders set the hole diameter ``d``, the hole length ``L``, the source distance ``z``, the ring
+pitch and the number of rings. Three panels:
+
+* **exam model** (Q2(d)): the face with each hole green when the exam's all-or-nothing rule
+  ``r L / z <= d`` lets it through and grey when it does not; the dashed circle is the cut-off
+  radius ``d z / L``;
+* **exact**: the same face with each hole coloured by the share of the photons falling on its
+  mouth that leave its back, from the exact lens-overlap model of
+  :mod:`course_lib.gamma_camera` (``hole_pass_area``); the dotted circle is the exact cut-off
+  ``d z / L + d / 2`` beyond which no straight ray passes;
+* **side view** (Q2(c)): one hole, the two lines from the crystal behind its centre through the
+  edges of its mouth, and the patch of the source plane they span, ``R = d (L + z) / L`` by
+  similar triangles (the dashed lines are the extreme edge-to-edge rays).
+
+The readout compares the exam's open fraction (open holes' area over the face area) with the
+exact transmission (uniform over the face, as the exam assumes, and for an isotropic point
+source) and gives the resolution. The button "Exam Q2(d)" restores the notebook's givens: 1 mm
+holes 40 mm long, 10 mm pitch, 4 rings (a 50 mm face, 81 holes), source at 1000 mm: 25 holes
+open, 0.25 %.
+
+Every change calls :meth:`CollimatorExplorer.update`, which replaces the paths and colour values
+of the existing hole collections (``set_paths``, ``set_array``), moves the circles, rectangles
+and lines (``set_radius``, ``set_bounds``, ``set_data``) and redraws; no artist is created.
+
+In a notebook::
+
+    %matplotlib widget
+    from course_lib.widgets.gamma_camera import collimator_explorer
+    collimator_explorer()
+"""
+
+from __future__ import annotations
+
+import ipywidgets as W
+import matplotlib as mpl
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.collections import PatchCollection
+from matplotlib.colors import ListedColormap
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, Patch, Rectangle
+
+from .. import gamma_camera as gc
+from ..plotting import COLOURS
+from ..plots.gamma_camera import OPEN, SEPTUM, SHUT
+from ._view import FigureView
+
+__all__ = ["CollimatorExplorer", "EXAM_SETTINGS", "collimator_explorer", "face_radius",
+           "hole_draw_radius"]
+
+#: The notebook's givens for Q2(d) (our reconstruction of the question, see the notebook).
+EXAM_SETTINGS = {"d": 1.0, "L": 40.0, "z": 1000.0, "pitch": 10.0, "n_rings": 4}
+
+
+def face_radius(pitch: float, n_rings: int) -> float:
+    """Radius of the collimator face: one pitch beyond the last ring (Q2(d): 5 x 10 = 50 mm)."""
+    return (int(n_rings) + 1) * float(pitch)
+
+
+def hole_draw_radius(d: float, pitch: float, n_rings: int) -> float:
+    """Radius at which the holes are drawn on the face.
+
+    Real holes are tiny next to the face (1 mm on 100 mm in Q2(d)), so they are drawn at 35 % of
+    the closest spacing between neighbouring holes (``2 pitch sin(pi / 8)`` along ring 1, or the
+    pitch itself when there is only the centre hole), or at their true radius if that is larger.
+    """
+    spacing = 2.0 * pitch * np.sin(np.pi / 8.0) if n_rings >= 1 else float(pitch)
+    return max(0.35 * spacing, d / 2.0)
+
+
+class CollimatorExplorer:
+    """Interactive explorer of the parallel-hole collimator of Q2(c)-(d) (see the module docstring).
+
+    Parameters
+    ----------
+    d, L, z, pitch : float
+        Initial hole diameter, hole length, source distance and ring pitch (mm).
+    n_rings : int
+        Initial number of rings around the centre hole.
+
+    Attributes
+    ----------
+    fig, ax_exam, ax_exact, ax_side
+        The figure and its three axes (exam model, exact transmission, side view).
+    d, L, z, pitch, n_rings
+        The controls (ipywidgets); set their ``.value`` from Python to drive the explorer.
+    exam_button : ipywidgets.Button
+        Restores :data:`EXAM_SETTINGS`.
+    readout : ipywidgets.HTML
+        Open holes, the exam's fraction, the exact transmissions and the resolution.
+    art : dict
+        The artists that :meth:`update` changes in place.
+    holes : numpy.ndarray
+        Current hole centres ``(n, 2)``.
+    exam_open, exact_share : numpy.ndarray
+        Per hole: the exam's 0/1 verdict and the exact share of its mouth's photons that pass.
+    results : dict
+        ``n_holes``, ``n_open``, ``face_radius``, ``cutoff_exam``, ``cutoff_exact``,
+        ``exam_fraction``, ``exact_fraction`` (uniform), ``isotropic_fraction`` and
+        ``resolution`` after the last update.
+    """
+
+    def __init__(self, d=1.0, L=40.0, z=1000.0, pitch=10.0, n_rings=4):
+        slider = {"continuous_update": True, "style": {"description_width": "150px"},
+                  "layout": W.Layout(width="400px")}
+        self.d = W.FloatSlider(d, min=0.2, max=5.0, step=0.1, description="hole diameter d (mm)",
+                               readout_format=".1f", **slider)
+        self.L = W.FloatSlider(L, min=5.0, max=250.0, step=1.0,
+                               description="hole length L (mm)", readout_format=".0f", **slider)
+        self.z = W.FloatSlider(z, min=10.0, max=3000.0, step=10.0,
+                               description="source distance z (mm)", readout_format=".0f",
+                               **slider)
+        self.pitch = W.FloatSlider(pitch, min=2.0, max=20.0, step=0.5,
+                                   description="ring pitch (mm)", readout_format=".1f", **slider)
+        self.n_rings = W.IntSlider(n_rings, min=0, max=8, step=1, description="number of rings",
+                                   **slider)
+        self.exam_button = W.Button(description="Exam Q2(d)", button_style="info",
+                                    tooltip="d = 1 mm, L = 40 mm, z = 1000 mm, pitch 10 mm, "
+                                            "4 rings on a 50 mm face")
+        self.readout = W.HTML()
+        self.results: dict = {}
+        self._layout = None
+        self._view = FigureView()
+        self._holding = False
+
+        with plt.ioff():
+            self.fig, axes = plt.subplots(1, 3, figsize=(13.5, 4.6),
+                                          gridspec_kw={"width_ratios": [1, 1.2, 0.9]})
+        self.fig.set_layout_engine("constrained")
+        self.ax_exam, self.ax_exact, self.ax_side = axes
+        canvas = self.fig.canvas
+        for attr, value in (("header_visible", False), ("resizable", False)):
+            if hasattr(canvas, attr):
+                setattr(canvas, attr, value)
+        self.art = self._draw()
+        for w in self.controls:
+            w.observe(self._on_change, names="value")
+        self.exam_button.on_click(self.load_exam)
+        self.update()
+
+    # ---------------------------------------------------------------------------------------
+    # drawing (once)
+
+    def _draw(self) -> dict:
+        art = {}
+        for key, ax in (("exam", self.ax_exam), ("exact", self.ax_exact)):
+            face = Circle((0, 0), 1.0, facecolor=SEPTUM, alpha=0.35, edgecolor="k")
+            ax.add_patch(face)
+            coll = PatchCollection([], edgecolor="k", linewidth=0.4)
+            if key == "exam":
+                coll.set_cmap(ListedColormap([SHUT, OPEN]))
+                coll.set_clim(0.0, 1.0)
+            else:
+                coll.set_cmap(mpl.colormaps["viridis"].with_extremes(under=SHUT))
+                coll.set_clim(1e-12, 1.0)      # holes that pass nothing are drawn grey
+            coll.set_array(np.zeros(0))
+            ax.add_collection(coll)
+            exam_cut = Circle((0, 0), 1.0, fill=False, linestyle="--", linewidth=1.3,
+                              edgecolor=COLOURS["highlight"])
+            exact_cut = Circle((0, 0), 1.0, fill=False, linestyle=":", linewidth=1.3,
+                               edgecolor="k")
+            ax.add_patch(exam_cut)
+            ax.add_patch(exact_cut)
+            ax.set_aspect("equal")
+            ax.set_xlabel("x (mm)")
+            art[key] = {"face": face, "holes": coll, "cutoffs": [exam_cut, exact_cut]}
+        self.ax_exam.set_ylabel("y (mm)")
+        self.ax_exam.legend(
+            handles=[Patch(facecolor=OPEN, edgecolor="k", label="open: r L / z ≤ d"),
+                     Patch(facecolor=SHUT, edgecolor="k", label="shut"),
+                     Line2D([], [], color=COLOURS["highlight"], linestyle="--",
+                            label="exam cut-off d z / L")],
+            loc="lower left", fontsize=7, framealpha=0.9)
+        self.ax_exact.legend(
+            handles=[Line2D([], [], color=COLOURS["highlight"], linestyle="--",
+                            label="exam cut-off d z / L"),
+                     Line2D([], [], color="k", linestyle=":", label="exact cut-off d z / L + d/2")],
+            loc="lower left", fontsize=7, framealpha=0.9)
+        art["colorbar"] = self.fig.colorbar(art["exact"]["holes"], ax=self.ax_exact, shrink=0.8,
+                                            label="share of a hole's photons that pass")
+
+        ax = self.ax_side
+        septa = [Rectangle((0, 0), 1, 1, facecolor=SEPTUM, edgecolor="k", hatch="//")
+                 for _ in range(2)]
+        for p in septa:
+            ax.add_patch(p)
+        rays = [ax.plot([], [], color=COLOURS["highlight"], linewidth=1.5)[0] for _ in range(2)]
+        extreme = [ax.plot([], [], color=COLOURS["control"], linestyle="--", linewidth=1.0)[0]
+                   for _ in range(2)]
+        (bracket,) = ax.plot([], [], color=COLOURS["curve"], linewidth=3,
+                             solid_capstyle="butt")
+        (crystal,) = ax.plot([], [], color="#444444", linewidth=4)
+        (face_line,) = ax.plot([], [], color="#444444", linewidth=0.6, linestyle=":")
+        (source,) = ax.plot([], [], "*", color=COLOURS["received"], markersize=11)
+        box = {"boxstyle": "round,pad=0.2", "fc": "white", "ec": "none", "alpha": 0.85}
+        labels = {
+            "R": ax.text(0, 0, "", ha="center", va="bottom", color=COLOURS["curve"]),
+            "L": ax.text(0, 0, "", ha="left", va="center", fontsize=9, bbox=box),
+            "d": ax.text(0, 0, "", ha="center", va="bottom", fontsize=9, bbox=box),
+            "z": ax.text(0, 0, "", ha="center", va="center", fontsize=9, bbox=box),
+            "crystal": ax.text(0, 0, "crystal", ha="right", va="top", fontsize=9),
+        }
+        ax.set_xlabel("lateral position (mm)")
+        ax.set_ylabel("distance from the collimator face (mm)")
+        ax.set_title("Q2(c): one hole, side view (not to scale)", fontsize=9)
+        art["side"] = {"septa": septa, "rays": rays, "extreme": extreme, "bracket": bracket,
+                       "crystal": crystal, "face": face_line, "source": source,
+                       "labels": labels}
+        return art
+
+    # ---------------------------------------------------------------------------------------
+    # the model
+
+    @property
+    def controls(self):
+        return (self.d, self.L, self.z, self.pitch, self.n_rings)
+
+    def update(self):
+        """Recompute, change the artists in place, refresh the readout and redraw."""
+        self.refresh()
+        self._redraw()
+
+    def refresh(self):
+        """The per-update compute: the holes' verdicts and transmissions, the artists' data and
+        the readout; no drawing."""
+        d, L, z = self.d.value, self.L.value, self.z.value
+        pitch, n = self.pitch.value, int(self.n_rings.value)
+        Rf = face_radius(pitch, n)
+        self.holes = gc.ring_hole_positions(pitch, n)
+        r = np.hypot(self.holes[:, 0], self.holes[:, 1])
+        # Q2(d): open when r L / z <= d (the rule of gc.open_fraction, per hole)
+        self.exam_open = (r * L / z <= d).astype(np.float64)
+        area = np.atleast_1d(gc.hole_pass_area(r, d, L, z))
+        self.exact_share = area / (np.pi * d**2 / 4.0)
+        res = {
+            "n_holes": len(self.holes),
+            "n_open": int(self.exam_open.sum()),
+            "face_radius": Rf,
+            "cutoff_exam": gc.exam_cutoff_radius(d, L, z),
+            "cutoff_exact": gc.exact_cutoff_radius(d, L, z),
+            "exam_fraction": gc.open_fraction(self.holes, d, L, z, Rf),
+            "exact_fraction": float(area.sum() / (np.pi * Rf**2)),
+            "isotropic_fraction": gc.exact_open_fraction(self.holes, d, L, z, Rf, "isotropic"),
+            "resolution": gc.collimator_resolution(d, L, z),
+            "overlap": bool(n >= 1 and d >= 2.0 * pitch * np.sin(np.pi / 8.0)),
+        }
+        self.results = res
+
+        radius = hole_draw_radius(d, pitch, n)
+        lim = 1.08 * Rf
+        for key, ax, values in (("exam", self.ax_exam, self.exam_open),
+                                ("exact", self.ax_exact, self.exact_share)):
+            a = self.art[key]
+            a["face"].set_radius(Rf)
+            # PatchCollection.set_paths takes patches and stores their paths (no new artist)
+            a["holes"].set_paths([Circle(tuple(c), radius) for c in self.holes])
+            a["holes"].set_array(values)
+            a["cutoffs"][0].set_radius(res["cutoff_exam"])
+            a["cutoffs"][1].set_radius(res["cutoff_exact"])
+            ax.set_xlim(-lim, lim)
+            ax.set_ylim(-lim, lim)
+        scale = radius / (d / 2.0)
+        size = f" (holes drawn ×{scale:.2g})" if scale > 1.0001 else ""
+        self.ax_exam.set_title(f"Q2(d) exam model: {res['n_open']} of {res['n_holes']} holes "
+                               f"open{size}", fontsize=9)
+        self.ax_exact.set_title(f"exact: {self.exact_share.sum():.2f} hole-equivalents pass"
+                                f"{size}", fontsize=9)
+        self._update_side(d, L, z, res["resolution"])
+        self.readout.value = self._readout_html(d, L, z, res)
+
+    def _update_side(self, d, L, z, R):
+        """Q2(c): move the side view's septa, rays, bracket and labels to ``d, L, z``."""
+        s = self.art["side"]
+        w = 1.2 * d
+        s["septa"][0].set_bounds(-d / 2 - w, -L, w, L)
+        s["septa"][1].set_bounds(d / 2, -L, w, L)
+        for sign, ray in zip((1, -1), s["rays"]):
+            ray.set_data([0.0, sign * R / 2], [-L, z])
+        far = d / 2 + d * z / L                    # edge-to-edge ray at the source plane
+        for sign, ray in zip((1, -1), s["extreme"]):
+            ray.set_data([-sign * d / 2, sign * far], [-L, z])
+        s["bracket"].set_data([-R / 2, R / 2], [z, z])
+        span = 1.12 * max(far, d / 2 + w)
+        s["crystal"].set_data([-span, span], [-L, -L])
+        s["face"].set_data([-span, span], [0.0, 0.0])
+        s["source"].set_data([0.0], [z])
+        top = 1.15 * z + 0.1 * L
+        lab = s["labels"]
+        lab["R"].set_text(f"R = d(L+z)/L = {R:.3g} mm")
+        lab["R"].set_position((0.0, z + 0.03 * (z + L)))
+        lab["L"].set_text(f"L = {L:g} mm")
+        lab["L"].set_position((-0.97 * span, -L / 2))
+        lab["d"].set_text(f"d = {d:g} mm")
+        lab["d"].set_position((0.0, 0.02 * (L + z)))
+        lab["z"].set_text(f"z = {z:g} mm")
+        lab["z"].set_position((0.0, z / 2))
+        lab["crystal"].set_position((0.95 * span, -L - 0.01 * (L + z)))
+        self.ax_side.set_xlim(-span, span)
+        self.ax_side.set_ylim(-L - 0.12 * (L + z), top + 0.05 * (L + z))
+
+    def _readout_html(self, d, L, z, res) -> str:
+        ratio = (res["exam_fraction"] / res["exact_fraction"]
+                 if res["exact_fraction"] > 0 else float("inf"))
+        warn = ""
+        if res["overlap"]:
+            warn = ("<br><span style='color:#d62728'>the holes are wider than their spacing "
+                    "and overlap: no septa are left between them, so neither model "
+                    "applies</span>")
+        return (
+            "<div style='font-family: monospace; font-size: 12px; line-height: 1.5'>"
+            f"face radius {res['face_radius']:g} mm, {res['n_holes']} holes; "
+            f"cut-off d z / L = {res['cutoff_exam']:.4g} mm "
+            f"(exact: + d/2 = {res['cutoff_exact']:.4g} mm)<br>"
+            f"<b>exam model</b> (Q2(d)): {res['n_open']} of {res['n_holes']} holes open, "
+            f"open fraction {100 * res['exam_fraction']:.4g} %<br>"
+            f"<b>exact transmission</b>: {100 * res['exact_fraction']:.4g} % "
+            f"(uniform over the face, as the exam assumes); "
+            f"{100 * res['isotropic_fraction']:.4g} % (isotropic point source); "
+            f"exam / exact = {ratio:.3g}<br>"
+            f"<b>resolution</b> (Q2(c)) at z = {z:g} mm: R = d (L + z) / L = "
+            f"{res['resolution']:.4g} mm{warn}</div>"
+        )
+
+    # ---------------------------------------------------------------------------------------
+    # controls
+
+    def set(self, **values):
+        """Set several controls at once (``d=2.0, z=500``, ...) and update once."""
+        self._holding = True
+        try:
+            for name, value in values.items():
+                getattr(self, name).value = value
+        finally:
+            self._holding = False
+        self.update()
+
+    def load_exam(self, *_):
+        """Restore the notebook's Q2(d) givens (:data:`EXAM_SETTINGS`), with one update."""
+        self.set(**EXAM_SETTINGS)
+
+    def _on_change(self, change):
+        if not self._holding:
+            self.update()
+
+    # ---------------------------------------------------------------------------------------
+    # display
+
+    def _redraw(self):
+        self._view.redraw(self.fig)
+
+    @property
+    def widget(self):
+        """The explorer's layout: the figure above the sliders, the button and the readout."""
+        if self._layout is None:
+            view = self._view.widget(self.fig)
+            left = W.VBox([self.d, self.L, self.z])
+            right = W.VBox([self.pitch, self.n_rings, self.exam_button])
+            self._layout = W.VBox([view, W.HBox([left, right]), self.readout])
+            self._redraw()
+        return self._layout
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        display(self.widget)
+
+
+def collimator_explorer(d=1.0, L=40.0, z=1000.0, pitch=10.0, n_rings=4) -> CollimatorExplorer:
+    """The Q2(c)-(d) collimator explorer (display it as a cell's last expression)."""
+    return CollimatorExplorer(d=d, L=L, z=z, pitch=pitch, n_rings=n_rings)
