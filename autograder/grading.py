@@ -730,7 +730,7 @@ def grade_task(task: Task, opts: Options, workdir: str, slot: int, deny: list[st
         expected = [None]
         inputs = [((), {})]
     else:
-        all_cases = list(ex.cases(rng))
+        all_cases = ex.draw_cases(rng)
         cases, expected, inputs = [], [], []
         for case in all_cases:
             exp = None

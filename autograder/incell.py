@@ -27,7 +27,7 @@ def run_cases(name: str, func, seed: int = INCELL_SEED) -> list[tuple[object, st
     """``[(case, reason_or_None), ...]`` for every case of exercise ``name`` against ``func``."""
     ex = get(name)
     results = []
-    for case in ex.cases(np.random.default_rng(seed)):
+    for case in ex.draw_cases(np.random.default_rng(seed)):
         results.append((case, judge(ex, case, func)))
     return results
 

@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from collections.abc import Callable, Iterable
 from typing import Any
-from collections.abc import Callable
 
 import numpy as np
 
@@ -60,11 +60,16 @@ class Exercise:
     notebook: str
     kind: str = "function"
     reference: Callable | None = None
-    cases: Callable[[np.random.Generator], list[Case]] | None = None
+    cases: Callable[[np.random.Generator], Iterable[Case]] | None = None
     compare: Callable[[Any, Any], str | None] | None = None
     answer: Any = None
     options: tuple = ()
     description: str = ""
+
+    def draw_cases(self, rng: np.random.Generator) -> list[Case]:
+        """The exercise's cases drawn from ``rng`` (``cases`` may return any iterable, e.g. be a
+        generator function), visible ones first."""
+        return list(self.cases(rng))
 
     def expected(self, case: Case):
         """The reference's plain-data answer for ``case`` (only for ``raises is None``)."""

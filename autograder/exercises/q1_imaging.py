@@ -98,15 +98,15 @@ _choices = ("a", "b", "c", "d")
 EXERCISES = [
     Exercise(name="displayed_thickness", notebook="q1_imaging",
              reference=ultrasound.displayed_thickness,
-             cases=lambda rng: list(_displayed_thickness_cases(rng)), compare=_rel,
+             cases=_displayed_thickness_cases, compare=_rel,
              description="Q1(c): thickness shown by a scanner assuming c_assumed"),
     Exercise(name="displayed_depths", notebook="q1_imaging",
              reference=ultrasound.displayed_depths,
-             cases=lambda rng: list(_displayed_depths_cases(rng)), compare=_rel,
+             cases=_displayed_depths_cases, compare=_rel,
              description="Q1(c): displayed depth of the far face of each layer"),
     Exercise(name="round_trip_attenuation_db", notebook="q1_imaging",
              reference=ultrasound.round_trip_attenuation_db,
-             cases=lambda rng: list(_round_trip_cases(rng)), compare=_rel,
+             cases=_round_trip_cases, compare=_rel,
              description="Q1(c): two-way attenuation in dB through a stack of layers"),
     # Q1(a)(i): planar X-ray = line integral of attenuation
     Exercise(name="xray_pixel_meaning", notebook="q1_imaging", kind="choice", answer="c",

@@ -159,7 +159,7 @@ def _open_fraction_cases(rng):
 
 def _function(name, reference, cases, description, compare=_REL):
     return Exercise(name=name, notebook=NB, reference=reference,
-                    cases=lambda rng: list(cases(rng)), compare=compare,
+                    cases=cases, compare=compare,
                     description=description)
 
 

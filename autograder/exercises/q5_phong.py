@@ -161,7 +161,7 @@ def _model_cases(rng):
 
 def _function(name, reference, cases, description):
     return Exercise(name=name, notebook=NB, reference=reference,
-                    cases=lambda rng: list(cases(rng)), compare=_COMPARE,
+                    cases=cases, compare=_COMPARE,
                     description=description)
 
 

@@ -142,7 +142,7 @@ def target_of(src) -> str:
         others = [text for gid, text in sol.items() if gid != name]
         if any(re.search(rf"\b{re.escape(name)}\s*\(", t) for t in others):
             continue
-        if len(REGISTRY[name].cases(np.random.default_rng(0))) >= 3:
+        if len(REGISTRY[name].draw_cases(np.random.default_rng(0))) >= 3:
             return name
     return function_names(src)[0]
 
@@ -152,7 +152,7 @@ def cases_of(student: str, name: str, secret: bytes = SECRET):
     ex = REGISTRY[name]
     if ex.kind == "choice":
         return [None]
-    return list(ex.cases(np.random.default_rng(case_seed(secret, student, name))))
+    return ex.draw_cases(np.random.default_rng(case_seed(secret, student, name)))
 
 
 def write_nb(path: Path, nb) -> None:
