@@ -36,3 +36,36 @@ class FigureView:
                 display(fig)
         else:
             fig.canvas.draw_idle()
+
+
+class FigureExplorer:
+    """What every figure-based explorer shares: the figure view, the cached layout, redrawing
+    and display. A subclass sets ``self.fig`` and writes ``_build_layout(view)``, which places
+    ``view`` (the figure's widget) among its controls and returns the whole layout."""
+
+    fig = None
+
+    @property
+    def _view(self) -> FigureView:
+        if "_figure_view" not in self.__dict__:
+            self._figure_view = FigureView()
+        return self._figure_view
+
+    def _build_layout(self, view):  # pragma: no cover - every explorer overrides it
+        raise NotImplementedError
+
+    def _redraw(self):
+        self._view.redraw(self.fig)
+
+    @property
+    def widget(self):
+        """The explorer's layout, built once; shows the figure as it is now."""
+        if self.__dict__.get("_layout") is None:
+            self._layout = self._build_layout(self._view.widget(self.fig))
+            self._redraw()
+        return self._layout
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        display(self.widget)

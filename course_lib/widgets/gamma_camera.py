@@ -48,7 +48,7 @@ from matplotlib.patches import Circle, Patch, Rectangle
 from .. import gamma_camera as gc
 from ..plotting import COLOURS
 from ..plots.gamma_camera import OPEN, SEPTUM, SHUT
-from ._view import FigureView
+from ._view import FigureExplorer
 
 __all__ = ["CollimatorExplorer", "EXAM_SETTINGS", "collimator_explorer", "face_radius",
            "hole_draw_radius"]
@@ -73,7 +73,7 @@ def hole_draw_radius(d: float, pitch: float, n_rings: int) -> float:
     return max(0.35 * spacing, d / 2.0)
 
 
-class CollimatorExplorer:
+class CollimatorExplorer(FigureExplorer):
     """Interactive explorer of the parallel-hole collimator of Q2(c)-(d) (see the module docstring).
 
     Parameters
@@ -124,8 +124,6 @@ class CollimatorExplorer:
                                             "4 rings on a 50 mm face")
         self.readout = W.HTML()
         self.results: dict = {}
-        self._layout = None
-        self._view = FigureView()
         self._holding = False
 
         with plt.ioff():
@@ -350,24 +348,11 @@ class CollimatorExplorer:
     # ---------------------------------------------------------------------------------------
     # display
 
-    def _redraw(self):
-        self._view.redraw(self.fig)
-
-    @property
-    def widget(self):
+    def _build_layout(self, view):
         """The explorer's layout: the figure above the sliders, the button and the readout."""
-        if self._layout is None:
-            view = self._view.widget(self.fig)
-            left = W.VBox([self.d, self.L, self.z])
-            right = W.VBox([self.pitch, self.n_rings, self.exam_button])
-            self._layout = W.VBox([view, W.HBox([left, right]), self.readout])
-            self._redraw()
-        return self._layout
-
-    def _ipython_display_(self):
-        from IPython.display import display
-
-        display(self.widget)
+        left = W.VBox([self.d, self.L, self.z])
+        right = W.VBox([self.pitch, self.n_rings, self.exam_button])
+        return W.VBox([view, W.HBox([left, right]), self.readout])
 
 
 def collimator_explorer(d=1.0, L=40.0, z=1000.0, pitch=10.0, n_rings=4) -> CollimatorExplorer:

@@ -26,7 +26,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from .. import marching_cubes as mc
-from ._view import FigureView
+from ._view import FigureExplorer
 from ..plots.marching_cubes import case_values, draw_case, update_case
 
 __all__ = ["CaseExplorer", "case_explorer", "case_summary"]
@@ -45,7 +45,7 @@ def case_summary(index: int, alternative: bool = False) -> str:
     return text
 
 
-class CaseExplorer:
+class CaseExplorer(FigureExplorer):
     """Interactive view of one marching-cubes cell (see the module docstring).
 
     Parameters
@@ -74,8 +74,6 @@ class CaseExplorer:
         if not 0.0 < iso < 1.0:
             raise ValueError(f"iso must lie strictly between 0 and 1, got {iso}")
         self._syncing = False
-        self._view = FigureView()
-        self._layout = None
 
         self.case = W.Dropdown(
             options=[(f"{c.number}{' (ambiguous)' if c.ambiguous else ''}", c.number)
@@ -168,26 +166,13 @@ class CaseExplorer:
     # ---------------------------------------------------------------------------------------
     # display
 
-    def _redraw(self):
-        self._view.redraw(self.fig)
-
-    @property
-    def widget(self):
+    def _build_layout(self, view):
         """The explorer's layout: the figure beside the controls."""
-        if self._layout is None:
-            view = self._view.widget(self.fig)
-            controls = W.VBox([self.case, self.index,
-                               W.HBox([W.Label("inside corners")] + self.corners),
-                               self.alternative, self.iso, self.info],
-                              layout=W.Layout(width="460px"))
-            self._layout = W.HBox([view, controls])
-            self._redraw()
-        return self._layout
-
-    def _ipython_display_(self):
-        from IPython.display import display
-
-        display(self.widget)
+        controls = W.VBox([self.case, self.index,
+                           W.HBox([W.Label("inside corners")] + self.corners),
+                           self.alternative, self.iso, self.info],
+                          layout=W.Layout(width="460px"))
+        return W.HBox([view, controls])
 
 
 def case_explorer(index: int = 1, iso: float = 0.5) -> CaseExplorer:

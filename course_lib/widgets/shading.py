@@ -31,7 +31,7 @@ import numpy as np
 
 from .. import shading
 from ..plots.shading import sphere_pair, update_sphere_pair
-from ._view import FigureView
+from ._view import FigureExplorer
 from ..plotting import new_figure
 
 __all__ = ["PhongExplorer", "angles", "direction", "hex_to_rgb", "phong_explorer", "rgb_to_hex"]
@@ -75,7 +75,7 @@ EXAM_SETTINGS = {
 }
 
 
-class PhongExplorer:
+class PhongExplorer(FigureExplorer):
     """Phong vs Blinn-Phong on a shaded sphere (Q5(a)-(c)).
 
     Parameters
@@ -131,8 +131,6 @@ class PhongExplorer:
         self.readout = W.HTML()
         self.peaks = [None, None]
         self.probe_values = {"phong": None, "blinn": None}
-        self._layout = None
-        self._view = FigureView()
         self._holding = False
         self._exam_mode = False
 
@@ -277,25 +275,12 @@ class PhongExplorer:
     # ---------------------------------------------------------------------------------------
     # display
 
-    def _redraw(self):
-        self._view.redraw(self.fig)
-
-    @property
-    def widget(self):
+    def _build_layout(self, view):
         """The explorer's layout: the two spheres above the controls and the readout."""
-        if self._layout is None:
-            view = self._view.widget(self.fig)
-            left = W.VBox([self.ka, self.kd, self.ks, self.n, self.colour])
-            right = W.VBox([self.light_azimuth, self.light_elevation, self.view_azimuth,
-                            self.view_elevation, self.exam_button])
-            self._layout = W.VBox([view, W.HBox([left, right]), self.readout])
-            self._redraw()
-        return self._layout
-
-    def _ipython_display_(self):
-        from IPython.display import display
-
-        display(self.widget)
+        left = W.VBox([self.ka, self.kd, self.ks, self.n, self.colour])
+        right = W.VBox([self.light_azimuth, self.light_elevation, self.view_azimuth,
+                        self.view_elevation, self.exam_button])
+        return W.VBox([view, W.HBox([left, right]), self.readout])
 
 
 def phong_explorer(size: int = 128) -> PhongExplorer:

@@ -28,7 +28,7 @@ import numpy as np
 
 from .. import splines
 from ..plots.splines import EXAMPLE_POINTS, draw_curve, spline_scene, update_curve
-from ._view import FigureView
+from ._view import FigureExplorer
 from ..plotting import new_figure
 
 __all__ = ["SplineEndExplorer", "combination_tex", "formulas_html", "spline_end_explorer"]
@@ -96,7 +96,7 @@ def formulas_html(kind: str, rule: str, end=None) -> str:
     return "".join(html)
 
 
-class SplineEndExplorer:
+class SplineEndExplorer(FigureExplorer):
     """Interactive explorer of Q4(c)'s end conditions (see the module docstring).
 
     Parameters
@@ -130,8 +130,6 @@ class SplineEndExplorer:
         self.phantoms = splines.extend_with_phantoms(self.points, "d=2c-b")[[0, -1]]
         self._drag = None
         self._syncing = False
-        self._view = FigureView()
-        self._layout = None
 
         lo, hi = self.points.min(axis=0), self.points.max(axis=0)
         span = max(float(np.max(hi - lo)), 1.0)
@@ -308,24 +306,11 @@ class SplineEndExplorer:
     # ---------------------------------------------------------------------------------------
     # display
 
-    def _redraw(self):
-        self._view.redraw(self.fig)
-
-    @property
-    def widget(self):
+    def _build_layout(self, view):
         """The explorer's layout: the figure beside the controls and the formulas."""
-        if self._layout is None:
-            view = self._view.widget(self.fig)
-            controls = W.VBox([self.kind, self.rule, self.point, self.x, self.y,
-                               self.show_hull, self.formulas, self.status])
-            self._layout = W.HBox([view, controls])
-            self._redraw()
-        return self._layout
-
-    def _ipython_display_(self):
-        from IPython.display import display
-
-        display(self.widget)
+        controls = W.VBox([self.kind, self.rule, self.point, self.x, self.y,
+                           self.show_hull, self.formulas, self.status])
+        return W.HBox([view, controls])
 
 
 def spline_end_explorer(points=None, kind="catmull-rom", rule="d=b") -> SplineEndExplorer:
