@@ -1,0 +1,192 @@
+"""The grader's vocabulary: plain dataclasses and enums, shared by every stage.
+
+Data flows one way through the autograder::
+
+    grade/ (read submissions, plan cells)  ->  isolation/ (run jobs)  ->  judging (verdicts,
+    scores)  ->  outputs/ (csv, feedback, report, gradebook)
+
+Every stage speaks in the types below. This module imports nothing of the package (and nothing
+but the standard library), so any stage, and any test, can use it.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from typing import Any
+
+ASSIGNMENT = "tripos2006"
+
+
+class CellKind(str, enum.Enum):
+    """What kind of graded cell a row of the gradebook is."""
+
+    FUNCTION = "function"   #: a graded function, run on visible and hidden cases
+    CHOICE = "choice"       #: a multiple-choice variable (a string of option letters)
+    MANUAL = "manual"       #: a written answer, marked by hand
+
+
+class OutcomeKind(str, enum.Enum):
+    """What happened when the sandbox ran one case (observed, not yet judged)."""
+
+    RETURNED = "returned"               #: returned plain data (``CaseOutcome.value``)
+    RAISED = "raised"                   #: raised an exception
+    TIMEOUT = "timeout"                 #: took longer than the case's time limit
+    CRASHED = "crashed"                 #: the process died (signal, memory limit, os._exit)
+    REJECTED = "rejected"               #: returned something that is not plain data, or too big
+    REFERENCE_USED = "reference-used"   #: imported or called a course reference (absent)
+    NOT_RUN = "not-run"                 #: never reached (the job's time ran out, too many crashes)
+
+
+class Verdict(str, enum.Enum):
+    """The judgement of one case."""
+
+    PASS = "pass"
+    WRONG_VALUE = "wrong-value"
+    WRONG_SHAPE = "wrong-shape"         #: wrong shape, type or number of values
+    UNANSWERED = "unanswered"           #: no answer given (a choice left empty or None)
+    ERROR = "error"
+    TIMEOUT = "timeout"
+    REJECTED = "rejected"
+    REFERENCE_USED = "reference-used"
+
+
+class Status(str, enum.Enum):
+    """The status of one graded cell: the ``status`` column of ``grades.csv``."""
+
+    OK = "ok"
+    FAILED = "failed"
+    UNANSWERED = "unanswered"
+    ERROR = "error"
+    TIMEOUT = "timeout"
+    REJECTED_OUTPUT = "rejected-output"
+    REFERENCE_USED = "reference-used"
+    MISSING = "missing"
+    UNREADABLE = "unreadable"
+    MANUAL = "manual"
+    GRADER_ERROR = "grader-error"       #: an internal error of the grader: never the student's
+
+
+#: What each status means for the student (the report's legend, the README's table).
+STATUS_MEANING = {
+    Status.OK: "every case passed",
+    Status.FAILED: "the function ran but some answers were wrong (value, shape or type), or it "
+                   "did not raise the error a bad input calls for",
+    Status.UNANSWERED: "no answer was given: the cell was left as released, emptied, or sets the "
+                       "answer to None",
+    Status.ERROR: "the function raised an exception or crashed its process on some cases, or "
+                  "the name is not defined after running the solution cells",
+    Status.TIMEOUT: "the function took longer than the time limit on some cases",
+    Status.REJECTED_OUTPUT: "the function returned something that is not plain numbers (an "
+                            "object of its own class, an array subclass, a result too large)",
+    Status.REFERENCE_USED: "the code imported or called the course's reference implementation "
+                           "(score 0)",
+    Status.MISSING: "the notebook was not submitted (or was renamed), or its solution cell is "
+                    "gone",
+    Status.UNREADABLE: "the notebook file could not be read: invalid JSON, an old notebook "
+                       "format, not a notebook, or far too large",
+    Status.MANUAL: "a written answer, marked by hand in the Formgrader (no automatic score)",
+    Status.GRADER_ERROR: "the grader itself failed on this cell: the instructor must look into "
+                         "it (the student is not to blame)",
+}
+
+#: When a test cell fails in several ways, its status names the most serious one.
+SEVERITY = (Status.REFERENCE_USED, Status.REJECTED_OUTPUT, Status.TIMEOUT, Status.ERROR,
+            Status.FAILED, Status.UNANSWERED)
+
+#: The cell status a failing verdict maps to.
+VERDICT_STATUS = {
+    Verdict.WRONG_VALUE: Status.FAILED, Verdict.WRONG_SHAPE: Status.FAILED,
+    Verdict.UNANSWERED: Status.UNANSWERED, Verdict.ERROR: Status.ERROR,
+    Verdict.TIMEOUT: Status.TIMEOUT, Verdict.REJECTED: Status.REJECTED_OUTPUT,
+    Verdict.REFERENCE_USED: Status.REFERENCE_USED,
+}
+
+#: How a failing verdict reads in a summary ("3 wrong value, 1 timed out").
+VERDICT_WORDS = {
+    Verdict.WRONG_VALUE: "wrong value", Verdict.WRONG_SHAPE: "wrong shape or type",
+    Verdict.UNANSWERED: "no answer", Verdict.ERROR: "raised an error",
+    Verdict.TIMEOUT: "timed out", Verdict.REJECTED: "returned something that is not plain numbers",
+    Verdict.REFERENCE_USED: "used the reference",
+}
+
+
+@dataclass
+class CaseOutcome:
+    """What the sandbox observed for one case (no verdict yet)."""
+
+    index: int
+    kind: OutcomeKind
+    value: Any = None               #: the decoded plain data, for ``RETURNED``
+    error_type: str = ""            #: the exception's class name, for ``RAISED``
+    error_mro: tuple[str, ...] = ()  #: ``module.qualname`` of each class in its MRO
+    message: str = ""               #: capped exception text, or why the case did not run
+    seconds: float = 0.0
+    printed: str = ""               #: stdout/stderr written while the case ran (capped)
+
+
+@dataclass
+class NameRun:
+    """Everything the sandbox reports for one graded name of one notebook."""
+
+    name: str
+    outcomes: list[CaseOutcome]     #: one per case, in the order of the job's cases
+    defined: bool = True            #: the name existed after the solution cells ran
+    load_notes: list[str] = field(default_factory=list)  #: cells that failed, with why
+    printed: str = ""               #: output of the solution cells themselves (capped)
+    launches: int = 1               #: processes started for this name (restarts after crashes)
+    seconds: float = 0.0
+
+
+@dataclass
+class CaseRecord:
+    """One judged case, as the feedback shows it."""
+
+    index: int
+    label: str
+    visible: bool
+    verdict: Verdict
+    reason: str = ""
+    args: tuple = ()
+    kwargs: dict = field(default_factory=dict)
+    expected: Any = None
+    received: Any = None
+    raises: str = ""                #: the exception a bad input must raise, by name
+    printed: str = ""
+
+
+@dataclass
+class CellResult:
+    """One graded cell of one student's notebook: a row of ``grades.csv`` and its feedback."""
+
+    student: str
+    notebook: str
+    grade_id: str
+    name: str
+    score: float | None             #: None while a written answer waits for a marker
+    max_score: float
+    status: Status
+    message: str
+    kind: CellKind = CellKind.FUNCTION
+    cases: list[CaseRecord] = field(default_factory=list)
+    printed: str = ""               #: output of the solution cells (visible to the student)
+    notes: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+    code: str = ""                  #: the student's graded cell (or written answer)
+
+
+CSV_COLUMNS = ("student", "notebook", "grade_id", "score", "max_score", "status", "message")
+
+
+def format_score(x: float) -> str:
+    """A score as written to ``grades.csv``: at most six decimals, no trailing zeros."""
+    text = f"{float(x):.6f}".rstrip("0").rstrip(".")
+    return text if text not in ("", "-0") else "0"
+
+
+def csv_row(r: CellResult) -> dict[str, str]:
+    """The ``grades.csv`` row of a result."""
+    return {"student": r.student, "notebook": r.notebook, "grade_id": r.grade_id,
+            "score": "" if r.score is None else format_score(r.score),
+            "max_score": format_score(r.max_score), "status": Status(r.status).value,
+            "message": r.message}
