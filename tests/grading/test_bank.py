@@ -339,7 +339,7 @@ def _old_format(src, ctx):
 
 def _partial_expect(src, ctx):
     name = target_of(src)
-    cases = cases_of(ctx.student, name)
+    cases = cases_of(ctx.student, name, _submitted_nb(ctx, src))
     raising = sum(c.raises is not None and issubclass(ValueError, c.raises) for c in cases)
     exp = expect_full_marks(src)
     status = "ok" if raising == len(cases) else "error"
@@ -351,7 +351,7 @@ def _crash_expect(src, ctx):
     """Every third call in a process is killed; the grader restarts the child (three processes
     at most) from the case after the crash, so with cases 0..n-1 the passes are 0,1 | 3,4 | 6,7."""
     name = target_of(src)
-    n = len(cases_of(ctx.student, name))
+    n = len(cases_of(ctx.student, name, _submitted_nb(ctx, src)))
     passed = sum(1 for i in range(n) if i < 9 and i % 3 != 2)
     exp = expect_full_marks(src)
     exp[f"test_{name}"] = (points_of(src, name) * passed / n, "error" if passed < n else "ok")
@@ -422,6 +422,10 @@ ADVERSARIES: dict[str, Adversary] = {
 
 PAIRS = [(adv, nb) for adv, a in ADVERSARIES.items()
          for k, nb in enumerate(SOURCES) if a.all_notebooks or k == 0]
+
+
+def _submitted_nb(ctx: Ctx, src) -> Path:
+    return ctx.submitted / ctx.student / "tripos2006" / f"{src.name}.ipynb"
 
 
 def _ctx(root: Path, student: str) -> Ctx:
@@ -586,14 +590,15 @@ def test_hidden_cases_show_only_counts_without_reveal(bank):
     for nb_name, src in SOURCES.items():
         name = target_of(src)
         page = _feedback(bank, f"adv_edit_tests-{nb_name}", nb_name)
-        hidden = [c for c in cases_of(f"adv_edit_tests-{nb_name}", name) if not c.visible]
+        student = f"adv_edit_tests-{nb_name}"
+        cases = cases_of(student, name, _submitted_nb(_ctx(bank["root"], student), src))
+        hidden = [c for c in cases if not c.visible]
         if not hidden:
             continue
         assert f"Hidden cases: 0 of {len(hidden)} passed" in page
         assert "failing hidden case" not in page
         for case in hidden:   # no hidden label appears unless a visible case shares it
-            visible_labels = {c.label for c in cases_of(f"adv_edit_tests-{nb_name}", name)
-                              if c.visible}
+            visible_labels = {c.label for c in cases if c.visible}
             if case.label not in visible_labels and len(case.label) > 12:
                 assert html.escape(case.label) not in page
 
