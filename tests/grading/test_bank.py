@@ -28,7 +28,7 @@ import pytest
 from gradingtools import (expect_all, expect_full_marks, points_of,
                           CASE_TIMEOUT, SECRET, append_cell, cases_of, cell_index,
                           course_sources, model_version, read_grades, release_version,
-                          run_grade, target_of, write_nb)
+                          run_grade, set_cell, target_of, write_nb)
 
 from autograder.exercises import REGISTRY
 
@@ -79,6 +79,7 @@ class Adversary:
     expect: Callable         # (src, ctx) -> {grade_id: (score or None, status)}
     all_notebooks: bool = True
     message: dict = field(default_factory=dict)   # grade_id template -> words the message has
+    applies: Callable = lambda src: True           # (src) -> whether the notebook can have it
 
 
 def _edit(fn):
@@ -368,6 +369,74 @@ def _strip_expect(src, ctx):
     return exp
 
 
+# --------------------------------------------------------------------------------------------
+# issue 9: no answer, or an answer of the wrong form, is the student's status, never the grader's
+
+
+def _choice_of(src) -> str | None:
+    return next((n for n, _, _ in src.graded
+                 if n in REGISTRY and REGISTRY[n].kind == "choice"), None)
+
+
+def _set_answer(which, source):
+    """An edit setting the solution cell of the target function (``which="function"``) or of
+    the notebook's first choice item to ``source`` (None deletes the cell; "RELEASE" restores
+    the released stub); ``{name}`` in ``source`` is the item's name."""
+    def edit(nb, src, ctx):
+        name = target_of(src) if which == "function" else _choice_of(src)
+        if source is None:
+            del nb["cells"][cell_index(nb, name)]
+        elif source == "RELEASE":
+            stub = release_version(src)
+            set_cell(nb, name, stub["cells"][cell_index(stub, name)]["source"])
+        else:
+            set_cell(nb, name, source.format(name=name))
+    return _edit(edit)
+
+
+def _answer_expect(which, status):
+    def expect(src, ctx):
+        exp = expect_full_marks(src)
+        name = target_of(src) if which == "function" else _choice_of(src)
+        exp[f"test_{name}"] = (0.0, status)
+        return exp
+    return expect
+
+
+def _no_answer(which, source, status, words=None):
+    return Adversary(_set_answer(which, source), _answer_expect(which, status),
+                     message={"answer": words} if words else {},
+                     applies=(lambda src: True) if which == "function"
+                     else (lambda src: _choice_of(src) is not None))
+
+
+def _release_expect(src, ctx):
+    exp = {tid: (0.0, "unanswered") for _, tid, _ in src.graded}
+    exp.update({gid: (None, "manual") for gid, _ in src.manual})
+    return exp
+
+
+ISSUE_9: dict[str, Adversary] = {
+    "adv_fn_untouched": _no_answer("function", "RELEASE", "unanswered", "stub"),
+    "adv_fn_emptied": _no_answer("function", "", "unanswered", "no code"),
+    "adv_fn_comments": _no_answer("function", "# I will do this later\n", "unanswered",
+                                  "no code"),
+    "adv_fn_none": _no_answer("function", "{name} = None\n", "unanswered", "None"),
+    "adv_fn_number": _no_answer("function", "{name} = 3.5\n", "failed", "must be a function"),
+    "adv_fn_list": _no_answer("function", "{name} = [1, 2, 3]\n", "failed", "a list"),
+    "adv_fn_arity": _no_answer("function", "def {name}(a, b, c, d, e, f, g, h, i, j, k, l, m, "
+                               "n):\n    return 0.0\n", "failed", "signature"),
+    "adv_choice_untouched": _no_answer("choice", "RELEASE", "unanswered", "stub"),
+    "adv_choice_emptied": _no_answer("choice", "", "unanswered", "no code"),
+    "adv_choice_deleted": _no_answer("choice", None, "missing", "deleted"),
+    "adv_choice_none": _no_answer("choice", "{name} = None\n", "unanswered", "None"),
+    "adv_choice_blank": _no_answer("choice", "{name} = ' '\n", "unanswered", "no answer"),
+    "adv_choice_number": _no_answer("choice", "{name} = 2\n", "failed", "string of option"),
+    "adv_choice_list": _no_answer("choice", "{name} = ['a']\n", "failed", "string of option"),
+    "adv_release": Adversary(lambda src, ctx: {f"{src.name}.ipynb": release_version(src)},
+                             _release_expect),
+}
+
 ADVERSARIES: dict[str, Adversary] = {
     # the grade is decided outside the student's process
     "adv_eq": Adversary(_target_code(EQ_ALWAYS_TRUE, keep_model=False),
@@ -418,10 +487,11 @@ ADVERSARIES: dict[str, Adversary] = {
     "adv_oversize": Adversary(
         lambda src, ctx: {f"{src.name}.ipynb": b"{" + b" " * (26 * 2**20) + b"}"},
         lambda src, ctx: expect_all(src, "unreadable"), all_notebooks=False),
+    **ISSUE_9,
 }
 
 PAIRS = [(adv, nb) for adv, a in ADVERSARIES.items()
-         for k, nb in enumerate(SOURCES) if a.all_notebooks or k == 0]
+         for k, nb in enumerate(SOURCES) if (a.all_notebooks or k == 0) and a.applies(SOURCES[nb])]
 
 
 def _submitted_nb(ctx: Ctx, src) -> Path:
@@ -534,6 +604,23 @@ def test_bank_case(bank, adv, notebook):
         assert words["target"] in rows[f"test_{target_of(src)}"]["message"]
     if "all" in words:
         assert all(words["all"] in r["message"] for r in rows.values())
+    if "answer" in words:
+        name = target_of(src) if adv.startswith("adv_fn") else _choice_of(src)
+        assert words["answer"] in rows[f"test_{name}"]["message"]
+
+
+def test_no_bank_submission_is_a_grader_error(bank):
+    """Whatever a submission does, it gets a student-facing status (issue 9)."""
+    bad = {k: (r["status"], r["message"][:200]) for k, r in bank["rows"].items()
+           if r["status"] == "grader-error" or "grader failed" in r["message"]}
+    assert not bad
+
+
+def test_unanswered_items_are_not_grader_failures_in_the_report(bank):
+    page = (bank["root"] / "out" / "report.html").read_text(encoding="utf-8")
+    table = page.split("Most-failed tests", 1)[1].split("</table>", 1)[0]
+    assert "grader-error" not in table
+    assert "unanswered" in table
 
 
 def test_other_notebooks_of_a_student_are_missing(bank):
