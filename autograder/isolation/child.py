@@ -286,7 +286,7 @@ def _set_rlimits(limits: dict, budget_seconds: float) -> None:
     import resource
 
     mb = 2**20
-    wanted = [(resource.RLIMIT_CORE, 0), (resource.RLIMIT_FSIZE, limits["scratch_mb"] * mb),
+    wanted = [(resource.RLIMIT_CORE, 0), (resource.RLIMIT_FSIZE, (limits["scratch_mb"] + 1) * mb),
               (resource.RLIMIT_CPU, int(budget_seconds) + 5)]
     if limits.get("nproc"):
         wanted.append((resource.RLIMIT_NPROC, int(limits["pids"])))

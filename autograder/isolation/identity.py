@@ -62,20 +62,21 @@ def allocate_uid() -> UidLease:
 
 
 def uid_processes(uid: int) -> list[int]:
-    """Pids of the processes whose real or effective uid is ``uid`` (from ``/proc``)."""
+    """Pids of the live processes whose real or effective uid is ``uid`` (from ``/proc``;
+    zombies, which run nothing and only wait for their parent to collect them, are left out)."""
     found = []
     for entry in os.listdir("/proc"):
         if not entry.isdigit():
             continue
         try:
             with open(f"/proc/{entry}/status", "rb") as f:
-                for line in f:
-                    if line.startswith(b"Uid:"):
-                        if str(uid).encode() in line.split()[1:3]:
-                            found.append(int(entry))
-                        break
+                status = dict(line.split(b":", 1) for line in f.read().splitlines()
+                              if b":" in line)
         except OSError:
             continue
+        uids = status.get(b"Uid", b"").split()[:2]
+        if str(uid).encode() in uids and not status.get(b"State", b"").strip().startswith(b"Z"):
+            found.append(int(entry))
     return found
 
 

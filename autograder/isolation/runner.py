@@ -220,9 +220,15 @@ def _read_channel(proc: subprocess.Popen, rfd: int, collector: Collector,
             return "done"
 
 
-def _stop(proc: subprocess.Popen) -> None:
+def _stop(proc: subprocess.Popen, ending: str) -> None:
     """End the sandbox: killing bubblewrap kills its PID namespace (the supervisor is PID 1,
-    with the parent-death signal set), and with it every process of the job."""
+    with the parent-death signal set), and with it every process of the job. After a normal
+    end, bubblewrap is first given a moment to collect the supervisor and exit by itself."""
+    if ending == "done":
+        try:
+            proc.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            pass
     if proc.poll() is None:
         try:
             os.killpg(proc.pid, 9)
@@ -280,12 +286,13 @@ def run_notebook(job: NotebookJob, limits: Limits = DEFAULT_LIMITS,
                 proc = _spawn(argv, cwd, env, wfd, errfile, cgroup)
             finally:
                 os.close(wfd)
+            ending = "eof"
             try:
                 ending = _read_channel(proc, rfd, collector,
                                        time.monotonic() + job_budget(job, limits))
             finally:
                 os.close(rfd)
-                _stop(proc)
+                _stop(proc, ending)
             if ending == "eof" and collector.records == 0:
                 raise bwrap.IsolationError(_sandbox_failure(proc, errfile))
     finally:
