@@ -144,7 +144,7 @@ def bwrap_command(job_file: str, allowlist_dir: str, child_file: str, channel_fd
     argv += ["--ro-bind", os.path.join(allowlist_dir, "course_lib"), f"{SITE}/course_lib",
              "--ro-bind", job_file, JOB, "--ro-bind", child_file, CHILD,
              "--proc", "/proc", "--dev", "/dev",
-             "--size", str(int(scratch_mb) * 2**20), "--tmpfs", "/tmp", "--chdir", "/tmp"]
+             "--size", str(int(scratch_mb) * 2**20), "--perms", "1777", "--tmpfs", "/tmp", "--chdir", "/tmp"]
     if uid is not None:
         argv += ["--cap-drop", "ALL", "--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID",
                  "--cap-add", "CAP_SETPCAP", "--as-pid-1", "--",

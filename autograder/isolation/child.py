@@ -406,40 +406,40 @@ class Capture:
 
 
 def _load_cells(nj: dict, ns: dict, limits: dict, send) -> str:
-    """Execute the name's cells in order under the load time limit, each failure a note.
-
-    Returns what of ``course_lib`` a failing cell tried to use (``""`` if none)."""
-    deadline = time.monotonic() + float(limits["load_timeout"])
+    """Execute the name's cells in order, each under the load time limit, each failure a
+    note. Returns what of ``course_lib`` a failing cell tried to use (``""`` if none)."""
     reference = ""
     for label, source in nj["cells"]:
         send({"t": "cell", "name": nj["name"], "label": label})
-        left = deadline - time.monotonic()
-        note = ""
-        if left <= 0:
-            note = (f"cell {label} was not run: the cells' time limit of "
-                    f"{limits['load_timeout']:g} s had run out")
-        else:
-            try:
-                code = compile(source, f"<cell {label}>", "exec")
-                try:
-                    signal.setitimer(signal.ITIMER_REAL, left)
-                    exec(code, ns)
-                finally:
-                    signal.setitimer(signal.ITIMER_REAL, 0)
-            except CaseTimeout:
-                note = f"cell {label} was stopped when the cells' time limit ran out " \
-                       "(an endless loop at its top level?)"
-            except SystemExit as exc:
-                note = f"cell {label} called sys.exit({_safe_str(exc, 100)}): ignored"
-            except BaseException as exc:  # noqa: BLE001 - student code may raise anything
-                ref = reference_module(exc)
-                reference = reference or ref
-                note = f"cell {label} raised {_exc_name(exc)}: {_safe_str(exc, 300)}"
-                if ref:
-                    note += f" ({ref} is the course's reference, not available while grading)"
+        note, ref = _run_cell(label, source, ns, float(limits["load_timeout"]))
+        reference = reference or ref
         if note:
             send({"t": "note", "name": nj["name"], "text": note})
     return reference
+
+
+def _run_cell(label: str, source: str, ns: dict, timeout: float) -> tuple[str, str]:
+    """``(note, reference)`` of one cell: why it failed (``""`` if it did not), and what of
+    ``course_lib`` it tried to use."""
+    try:
+        code = compile(source, f"<cell {label}>", "exec")
+        try:
+            signal.setitimer(signal.ITIMER_REAL, timeout)
+            exec(code, ns)
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+    except CaseTimeout:
+        return f"cell {label} was stopped after {timeout:g} s (an endless loop at its top " \
+               "level?)", ""
+    except SystemExit as exc:
+        return f"cell {label} called sys.exit({_safe_str(exc, 100)}): ignored", ""
+    except BaseException as exc:  # noqa: BLE001 - student code may raise anything
+        ref = reference_module(exc)
+        note = f"cell {label} raised {_exc_name(exc)}: {_safe_str(exc, 300)}"
+        if ref:
+            note += f" ({ref} is the course's reference, not available while grading)"
+        return note, ref
+    return "", ""
 
 
 def _exc_name(exc: BaseException) -> str:
@@ -677,8 +677,9 @@ class NameSupervisor:
             t, now = rec.get("t"), time.monotonic()
             if rec.get("name") != self.nj["name"]:
                 return self.failed("garbage", loading, started)
-            if t == "cell" and loading:
+            if t == "cell" and loading:   # each cell has the load time limit
                 self.label = str(rec.get("label"))[:100]
+                deadline = now + float(self.limits["load_timeout"]) + GRACE
             elif t == "note" and loading:
                 if self.launches == 1:
                     self.emit({"t": "note", "text": str(rec.get("text"))[:2000]})
@@ -722,7 +723,7 @@ class NameSupervisor:
         spent = time.monotonic() - started
         if loading:
             if event == "timeout":
-                self.settle_rest("timeout", f"the cells did not finish within "
+                self.settle_rest("timeout", f"cell {self.label} did not finish within "
                                             f"{self.limits['load_timeout']:g} s")
             elif event == "eof":
                 self.settle_rest("crashed", f"crashed while running cell {self.label}: {why}")

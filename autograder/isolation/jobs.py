@@ -20,7 +20,7 @@ class Limits:
     """Resource limits of one job (the defaults suit the course's exercises)."""
 
     case_timeout: float = 10.0    #: wall seconds per case
-    load_timeout: float = 40.0    #: wall seconds for the setup + solution cells of one name
+    load_timeout: float = 40.0    #: wall seconds for the setup cell, and for each solution cell
     memory_mb: int = 2048         #: the WHOLE job (all its processes, incl. its tmpfs scratch)
     scratch_mb: int = 64          #: size of the private tmpfs (/tmp, HOME, cwd)
     pids: int = 64                #: processes + threads of the whole job

@@ -42,10 +42,10 @@ ENDINGS = {
 
 def job_budget(job: NotebookJob, limits: Limits) -> float:
     """Wall seconds the whole job may take (the supervisor's own limits, every restart)."""
-    per_load = limits.load_timeout + child.GRACE
-    total = STARTUP_SECONDS + per_load
+    per_cell = limits.load_timeout + child.GRACE
+    total = STARTUP_SECONDS + per_cell
     for nj in job.names:
-        total += limits.max_launches * per_load
+        total += limits.max_launches * per_cell * max(1, len(nj.cells))
         total += len(nj.cases) * (limits.case_timeout + child.GRACE + 0.5)
     return total
 
