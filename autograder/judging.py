@@ -217,6 +217,13 @@ def unanswered_or_broken(name: str, kind: CellKind, hint: AnswerHint, defined: b
     return None
 
 
+def reference_imported(name: str, reference: str) -> tuple[Status, str]:
+    """The status of a graded function whose cell imports the course's reference."""
+    return Status.REFERENCE_USED, (f"the cell of {name} imports {reference}, the course's "
+                                   "reference implementation: a graded function must be your "
+                                   "own work, so this test scores 0")
+
+
 # --------------------------------------------------------------------------------------------
 # keeping values small once judged
 

@@ -203,6 +203,7 @@ class AnswerHint:
 
     shape: AnswerShape = AnswerShape.WRITTEN
     detail: str = ""                #: e.g. "a list", "takes 2 arguments"
+    reference: str = ""             #: what of the course's reference the cell imports, if any
 
 
 @dataclass

@@ -9,8 +9,6 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "autograder"
 LIMIT = 80
-#: TEMPORARY: the old in-process sandbox, deleted when the OS-level sandbox (branch iso) lands.
-LEGACY = {"sandbox.py"}
 
 
 def _long_functions(path: Path) -> list[str]:
@@ -28,8 +26,6 @@ def _long_functions(path: Path) -> list[str]:
 @pytest.mark.parametrize("path", sorted(PACKAGE.rglob("*.py")),
                          ids=lambda p: str(p.relative_to(PACKAGE)))
 def test_no_function_is_longer_than_80_lines(path):
-    if path.relative_to(PACKAGE).as_posix() in LEGACY:
-        pytest.xfail("legacy module, to be deleted")
     assert not _long_functions(path)
 
 

@@ -19,13 +19,13 @@ from pathlib import Path
 
 from .. import judging
 from ..exercises import REGISTRY
+from ..isolation import CaseInput, Limits, Mode, NameJob, NotebookJob, run_notebook
 from ..model import (ASSIGNMENT, AnswerHint, Batch, CaseRecord, CellKind, CellResult, NameRun,
                      SourceNotebook, Status, Submission, Verdict)
 from .cases import DrawnCase, case_seed, draw, solution_digest
 from .planning import CellPlan, answer_hint, plan_cells
 from .progress import Progress
 from .reading import MAX_NOTEBOOK_MB, discover_students, read_submission
-from .sandbox import CaseInput, Limits, Mode, NameJob, NotebookJob, run_notebook
 
 #: Characters of printed output kept per graded cell for its feedback.
 PRINTED_CAP = 20_000
@@ -197,7 +197,9 @@ def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
                           "the instructor will look into it", kind=kind, code=code)
     records = _records(ex, kind, drawn, run)
     score, status, message = judging.summarise(records, points, kind)
-    if score == 0 and status is not Status.REFERENCE_USED:
+    if hint.reference and kind is CellKind.FUNCTION:
+        score, status, message = 0.0, *judging.reference_imported(name, hint.reference)
+    elif score == 0 and status is not Status.REFERENCE_USED:
         why = "; ".join(judging.clip(n, 200) for n in run.load_notes[-3:])
         override = judging.unanswered_or_broken(name, kind, hint, run.defined, why)
         if override is not None:

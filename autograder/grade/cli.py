@@ -22,11 +22,11 @@ import time
 import traceback
 from pathlib import Path
 
+from ..isolation import UNSAFE_WARNING, IsolationUnavailable, Limits, Mode, probe
 from ..outputs import csv as csv_output
 from ..outputs import feedback, gradebook, report
 from .batch import Options, grade_batch
 from .reading import MAX_NOTEBOOK_MB
-from .sandbox import UNSAFE_WARNING, IsolationUnavailable, Limits, Mode, probe
 from .secret import read_secret
 from .sources import default_sources, load_source
 
@@ -106,25 +106,12 @@ def main(args: argparse.Namespace) -> int:
     sources = [load_source(p) for p in paths]
     args.out.mkdir(parents=True, exist_ok=True)
     os.chmod(args.out, 0o700)
-    _deny_for_standin(args, sources)
     t0 = time.monotonic()
     batch = grade_batch(args.submitted, sources, _options(args, secret, mode))
     _write_outputs(batch, sources, args)
     print(f"graded {len(batch.students)} students, {len(batch.results)} cells in "
           f"{time.monotonic() - t0:.0f} s: {args.out / 'grades.csv'}", file=sys.stderr)
     return 0
-
-
-def _deny_for_standin(args, sources) -> None:
-    from . import sandbox as sb
-
-    if sb.run_notebook.__module__.endswith("standin"):  # TEMPORARY until iso is merged
-        from . import standin
-
-        standin.DENY[:] = [str(args.out.resolve()), str(args.submitted.resolve())] + sorted(
-            {str(Path(s.path).resolve().parent) for s in sources})
-        if os.geteuid() == 0 and os.stat(args.submitted).st_mode & 0o077:
-            os.chmod(args.submitted, 0o700)  # the old sandbox's uids must not read it
 
 
 def _write_outputs(batch, sources, args) -> None:

@@ -14,6 +14,7 @@ import inspect
 import re
 from dataclasses import dataclass, field
 
+from ..isolation.child import ALLOWED_COURSE_MODULES, ALLOWED_REFERENCE
 from ..model import AnswerHint, AnswerShape, CellKind, SourceNotebook, Submission
 
 
@@ -140,7 +141,33 @@ def answer_hint(code: str, name: str, kind: CellKind, calls=()) -> AnswerHint:
     if len(body) == 1 and _is_stub_raise(body[0]):
         return AnswerHint(AnswerShape.UNTOUCHED)
     found = _bindings(code, name) or []
-    return _hint_of_binding(found[-1], kind, calls) if found else AnswerHint()
+    hint = _hint_of_binding(found[-1], kind, calls) if found else AnswerHint()
+    hint.reference = reference_import(tree)
+    return hint
+
+
+def reference_import(tree: ast.AST) -> str:
+    """The first import of the course's reference in ``tree`` (anywhere in it), else ``""``.
+
+    Everything under ``course_lib`` is the reference except the data tables the sandbox
+    provides (:data:`autograder.isolation.child.ALLOWED_REFERENCE`).
+    """
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if _is_course(alias.name) and alias.name not in ALLOWED_COURSE_MODULES:
+                    return alias.name
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and _is_course(node.module):
+            allowed = ALLOWED_REFERENCE.get(node.module, ())
+            for alias in node.names:
+                full = f"{node.module}.{alias.name}"
+                if alias.name not in allowed and full not in ALLOWED_REFERENCE:
+                    return full
+    return ""
+
+
+def _is_course(module: str | None) -> bool:
+    return bool(module) and (module == "course_lib" or module.startswith("course_lib."))
 
 
 def _hint_of_binding(node: ast.stmt, kind: CellKind, calls) -> AnswerHint:
