@@ -41,7 +41,7 @@ details{margin:.4em 0}svg{background:#fafafa;border:1px solid #ddd}
 _VERDICT = {
     "pass": "passed", "wrong-value": "wrong value", "wrong-shape": "wrong shape or type",
     "error": "error", "timeout": "timed out", "rejected": "not plain numbers",
-    "reference-used": "called the reference",
+    "reference-used": "called the reference", "unanswered": "not attempted",
 }
 
 

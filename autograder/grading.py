@@ -53,7 +53,9 @@ from typing import Any
 import numpy as np
 
 from . import sandbox
-from .exercises import REGISTRY, NotPlainData, same_choice, to_plain
+from course_lib.answers import ChoiceFormatError, choice_letters
+
+from .exercises import REGISTRY, NotPlainData, to_plain
 
 ASSIGNMENT = "tripos2006"
 
@@ -64,6 +66,8 @@ STATUSES = {
               "not raise the error a bad input calls for",
     "error": "the function raised an exception or crashed the Python process on some cases, or "
              "it is not defined after running the solution cells",
+    "unanswered": "no answer was given: the cell is as released (it still raises "
+                  "NotImplementedError), emptied, or sets the answer to None",
     "timeout": "the function took longer than the time limit on some cases",
     "rejected-output": "the function returned something that is not plain numbers (an object of "
                        "its own class, an array subclass, a result too large to keep)",
@@ -72,9 +76,11 @@ STATUSES = {
     "unreadable": "the notebook file could not be read: invalid JSON, an old notebook format, "
                   "not a notebook, or far too large",
     "manual": "a written answer, marked by hand in formgrader (no automatic score)",
+    "grader-error": "the grader itself failed on this cell (not the student's doing): the "
+                    "instructor must look into it",
 }
 #: When a test cell fails in several ways, the status names the most serious one.
-_SEVERITY = ["reference-used", "rejected-output", "timeout", "error", "failed"]
+_SEVERITY = ["reference-used", "rejected-output", "timeout", "error", "failed", "unanswered"]
 CSV_COLUMNS = ["student", "notebook", "grade_id", "score", "max_score", "status", "message"]
 
 DEFAULT_SECRET = Path("~/.config/4f9/secret").expanduser()
@@ -448,14 +454,9 @@ def case_seed(secret: bytes, student: str, name: str) -> int:
 def _verdict(ex, case, expected, outcome: sandbox.CaseOutcome) -> tuple[str, str]:
     """``(verdict, reason)`` for one case, decided here, never in the student's process."""
     kind = outcome.kind
+    if ex.kind == "choice":
+        return _choice_verdict(ex, outcome)
     if kind == "returned":
-        if ex.kind == "choice":
-            value = outcome.value
-            if type(value) not in (str, frozenset, tuple):
-                return "wrong-shape", (f"expected option letters such as \"b\", got "
-                                       f"{type(value).__name__}")
-            why = same_choice(ex.answer, value)
-            return ("pass", "") if why is None else ("wrong-value", why)
         if case.raises is not None:
             return "wrong-value", (f"should raise {case.raises.__name__} for this input, but "
                                    "returned a value")
@@ -474,6 +475,9 @@ def _verdict(ex, case, expected, outcome: sandbox.CaseOutcome) -> tuple[str, str
             return "wrong-shape", why
         return "wrong-value", why
     if kind == "raised":
+        if outcome.error_type == "NotImplementedError":
+            return "unanswered", ("not attempted: the function still raises NotImplementedError "
+                                  "(delete that line and write your code)")
         if case.raises is not None:
             want = f"{case.raises.__module__}.{case.raises.__qualname__}"
             if want in outcome.error_mro:
@@ -495,17 +499,36 @@ def _verdict(ex, case, expected, outcome: sandbox.CaseOutcome) -> tuple[str, str
     return "error", outcome.message or kind
 
 
+def _choice_verdict(ex, outcome: sandbox.CaseOutcome) -> tuple[str, str]:
+    """A multiple-choice answer: one shared format (:func:`course_lib.answers.choice_letters`)."""
+    if outcome.kind != "returned":
+        return "unanswered", _no_answer(ex.name)
+    options = "".join(ex.options) if getattr(ex, "options", None) else "abcd"
+    try:
+        given = choice_letters(outcome.value, options, name=ex.name)
+    except ChoiceFormatError as exc:
+        return ("unanswered", _no_answer(ex.name)) if exc.unanswered else ("wrong-shape", str(exc))
+    key = choice_letters("".join(ex.answer), options)
+    return ("pass", "") if given == key else ("wrong-value", "wrong answer")
+
+
+def _no_answer(name: str) -> str:
+    return f"no answer given: set {name} to a string of option letters, such as \"a\" or \"bd\""
+
+
 def _clip(text: str, n: int) -> str:
     text = " ".join(str(text).split())
     return text if len(text) <= n else text[: n - 3] + "..."
 
 
 _VERDICT_WORDS = {
-    "wrong-value": "wrong value", "wrong-shape": "wrong shape or type", "error": "raised an error",
+    "unanswered": "not attempted", "wrong-value": "wrong value",
+    "wrong-shape": "wrong shape or type", "error": "raised an error",
     "timeout": "timed out", "rejected": "returned something that is not plain numbers",
     "reference-used": "called the reference",
 }
-_VERDICT_STATUS = {"wrong-value": "failed", "wrong-shape": "failed", "error": "error",
+_VERDICT_STATUS = {"unanswered": "unanswered", "wrong-value": "failed", "wrong-shape": "failed",
+                   "error": "error",
                    "timeout": "timeout", "rejected": "rejected-output",
                    "reference-used": "reference-used"}
 
@@ -520,6 +543,8 @@ def summarise(records: list[CaseRecord], points: float) -> tuple[float, str, str
     for r in records:
         if r.verdict != "pass":
             counts[r.verdict] = counts.get(r.verdict, 0) + 1
+    if counts.get("unanswered") == n:
+        return 0.0, "unanswered", _clip(records[0].reason, 300)
     if "reference-used" in counts:
         ref = next(r for r in records if r.verdict == "reference-used")
         return 0.0, "reference-used", (
@@ -698,7 +723,7 @@ def _run_tasks(tasks: list[Task], opts: Options) -> list[CellResult]:
         except Exception as exc:  # noqa: BLE001 - one broken task never stops the batch
             traceback.print_exc()
             return CellResult(task.student, task.src.name, task.test_id, task.name, 0.0,
-                              task.points, "error",
+                              task.points, "grader-error",
                               f"the grader failed on this test ({type(exc).__name__}); "
                               "please report it to the instructor")
         finally:
@@ -767,9 +792,14 @@ def grade_task(task: Task, opts: Options, workdir: str, slot: int, deny: list[st
     if not run.defined:
         why = "; ".join(_clip(n, 200) for n in load_notes[-3:])
         what = "function" if ex.kind == "function" else "answer variable"
+        status, message = "error", (f"the {what} {task.name} is not defined after running your "
+                                    "solution cells" + (f" ({why})" if why else ""))
+        if _unattempted(code, ex.kind):
+            status = "unanswered"
+            message = (_no_answer(task.name) if ex.kind == "choice" else
+                       f"not attempted: write the function {task.name} in its cell")
         res = CellResult(task.student, task.src.name, task.test_id, task.name, 0.0, task.points,
-                         "error", f"the {what} {task.name} is not defined after running your "
-                         "solution cells" + (f" ({why})" if why else ""), kind=ex.kind,
+                         status, message, kind=ex.kind,
                          cases=records, stdout=run.stdout, stderr=run.stderr, notes=notes,
                          seconds=run.seconds, code=code)
         return res
@@ -782,6 +812,17 @@ def grade_task(task: Task, opts: Options, workdir: str, slot: int, deny: list[st
     return CellResult(task.student, task.src.name, task.test_id, task.name, score, task.points,
                       status, message, kind=ex.kind, cases=records, stdout=run.stdout,
                       stderr=run.stderr, notes=notes + load_notes, seconds=run.seconds, code=code)
+
+
+def _unattempted(code: str, kind: str) -> bool:
+    """True for a solution cell left as released (only the stub) or emptied."""
+    body = [ln.strip() for ln in code.splitlines()
+            if ln.strip() and not ln.strip().startswith("#")]
+    stub = {"raise NotImplementedError()", "raise NotImplementedError"}
+    if kind == "choice":
+        return all(ln in stub for ln in body)
+    # a function cell: its signature and docstring stay; unattempted when nothing else runs
+    return not body or all(ln in stub for ln in body)
 
 
 class _Progress:

@@ -17,7 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .exercises import NotPlainData, get, same_choice, to_plain
+from course_lib.answers import ChoiceFormatError, choice_letters
+
+from .exercises import NotPlainData, get, to_plain
 
 #: The seed of the in-kernel hidden cases (the batch grader draws its own from the course secret).
 INCELL_SEED = 4_2006
@@ -53,8 +55,12 @@ def check(name: str, func_or_value) -> None:
     """Assert that a graded function (or a multiple-choice answer) passes all its cases."""
     ex = get(name)
     if ex.kind == "choice":
-        why = same_choice(ex.answer, func_or_value)
-        assert why is None, f"{name}: {why}"
+        options = "".join(ex.options) if ex.options else "abcd"
+        try:
+            given = choice_letters(func_or_value, options, name=name)
+        except ChoiceFormatError as exc:
+            raise AssertionError(f"{name}: {exc}") from None
+        assert given == choice_letters("".join(ex.answer), options), f"{name}: wrong answer"
         return
     failures = [(c, why) for c, why in run_cases(name, func_or_value) if why is not None]
     if failures:

@@ -103,6 +103,18 @@ def render(results: list[CellResult], sources: list[SourceNotebook]) -> str:
                    f"<td>{_e(how)}</td></tr>")
     out.append("</table>")
 
+    broken = [r for r in results if r.status == "grader-error"]
+    out.append(f"<h2>Grader errors ({len(broken)})</h2>")
+    if broken:
+        out.append("<p>The grader itself failed on these cells; the students are not to blame. "
+                   "Its traceback is in the grading log: fix the cause and grade again.</p>"
+                   "<table><tr><th>student</th><th>notebook</th><th>test</th></tr>")
+        out += [f"<tr><td>{_e(r.student)}</td><td>{_e(r.notebook)}</td>"
+                f"<td>{_e(r.grade_id)}</td></tr>" for r in broken]
+        out.append("</table>")
+    else:
+        out.append("<p>None: every cell was graded.</p>")
+
     bad = ungradeable(results)
     kinds = Counter(status for _, _, status, _ in bad)
     out.append(f"<h2>Submissions that could not be graded ({kinds.get('unreadable', 0)} "

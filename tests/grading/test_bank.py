@@ -28,7 +28,7 @@ import pytest
 from gradingtools import (expect_all, expect_full_marks, points_of,
                           CASE_TIMEOUT, SECRET, append_cell, cases_of, cell_index,
                           course_sources, model_version, read_grades, release_version,
-                          run_grade, target_of, write_nb)
+                          run_grade, set_cell, target_of, write_nb)
 
 from autograder.exercises import REGISTRY
 
@@ -362,6 +362,50 @@ def _tamper_expect(src, ctx):
     return expect_full_marks(src)
 
 
+def _choice_of(src) -> str:
+    """The first multiple-choice item of a notebook (every question notebook has one)."""
+    return next(name for name, _, _ in src.graded
+                if name in REGISTRY and REGISTRY[name].kind == "choice")
+
+
+def _set_choice(source: str | None):
+    """Set the notebook's first choice cell to ``source`` (None: delete the cell)."""
+    def edit(nb, src, ctx):
+        i = cell_index(nb, _choice_of(src))
+        if source is None:
+            del nb["cells"][i]
+        else:
+            nb["cells"][i]["source"] = source.replace("NAME", _choice_of(src))
+    return _edit(edit)
+
+
+def _with_choice(status, score=0.0):
+    def expect(src, ctx):
+        exp = expect_full_marks(src)
+        exp[f"test_{_choice_of(src)}"] = (score, status)
+        return exp
+    return expect
+
+
+def _set_target(source: str):
+    """Replace the target function's whole cell (``NAME`` stands for its name)."""
+    return _edit(lambda nb, src, ctx: set_cell(nb, target_of(src),
+                                               source.replace("NAME", target_of(src))))
+
+
+def _untouched_target(nb, src, ctx):
+    """The target's cell exactly as released: signature, docstring and the stub."""
+    released = release_version(src)
+    stub = released["cells"][cell_index(released, target_of(src))]["source"]
+    set_cell(nb, target_of(src), stub)
+
+
+def _blank_expect(src, ctx):
+    exp = {f"test_{name}": (0.0, "unanswered") for name, _, _ in src.graded}
+    exp.update({gid: (None, "manual") for gid, _ in src.manual})
+    return exp
+
+
 def _strip_expect(src, ctx):
     exp = expect_full_marks(src)
     exp.update({gid: (0.0, "missing") for gid, _ in src.manual})
@@ -404,6 +448,34 @@ ADVERSARIES: dict[str, Adversary] = {
     "adv_warnings": Adversary(_target_code(WARNINGS), lambda src, ctx: expect_full_marks(src)),
     "adv_widgets": Adversary(_edit(_widgets), lambda src, ctx: expect_full_marks(src)),
     "adv_huge_output": Adversary(_edit(_huge_output), lambda src, ctx: expect_full_marks(src)),
+    # no answer, or an answer of the wrong kind: always the student's status, never the grader's
+    "adv_blank_release": Adversary(lambda src, ctx: {f"{src.name}.ipynb": release_version(src)},
+                                   _blank_expect),
+    "adv_choice_none": Adversary(_set_choice("NAME = None\n"), _with_choice("unanswered"),
+                                 message={"choice": "no answer given"}),
+    "adv_choice_empty": Adversary(_set_choice(""), _with_choice("unanswered"),
+                                  message={"choice": "no answer given"}),
+    "adv_choice_spaces": Adversary(_set_choice("NAME = ' , '\n"), _with_choice("unanswered"),
+                                   message={"choice": "no answer given"}),
+    "adv_choice_number": Adversary(_set_choice("NAME = 3\n"), _with_choice("failed"),
+                                   message={"choice": "not int"}),
+    "adv_choice_list": Adversary(_set_choice("NAME = ['a']\n"), _with_choice("failed"),
+                                 message={"choice": "must be a string of option letters"}),
+    "adv_choice_bad_letters": Adversary(_set_choice("NAME = '(b)'\n"), _with_choice("failed"),
+                                        message={"choice": "may hold only the letters"}),
+    "adv_choice_deleted": Adversary(_set_choice(None), _with_choice("missing")),
+    "adv_func_untouched": Adversary(_edit(_untouched_target), _with_target("unanswered"),
+                                    message={"target": "not attempted"}),
+    "adv_func_emptied": Adversary(_set_target(""), _with_target("unanswered"),
+                                  message={"target": "not attempted"}),
+    "adv_func_none": Adversary(_set_target("NAME = None\n"), _with_target("error"),
+                               message={"target": "not callable"}),
+    "adv_func_number": Adversary(_set_target("NAME = 3\n"), _with_target("error"),
+                                 message={"target": "not callable"}),
+    "adv_func_list": Adversary(_set_target("NAME = [1.0, 2.0]\n"), _with_target("error"),
+                               message={"target": "not callable"}),
+    "adv_func_arity": Adversary(_set_target("def NAME():\n    return 0.0\n"),
+                                _with_target("error"), message={"target": "TypeError"}),
     # files that cannot be graded
     "adv_invalid_json": Adversary(
         lambda src, ctx: {f"{src.name}.ipynb": json.dumps(model_version(src))[:-200]},
@@ -530,6 +602,31 @@ def test_bank_case(bank, adv, notebook):
         assert words["target"] in rows[f"test_{target_of(src)}"]["message"]
     if "all" in words:
         assert all(words["all"] in r["message"] for r in rows.values())
+    if "choice" in words:
+        assert words["choice"] in rows[f"test_{_choice_of(src)}"]["message"]
+    assert not [gid for gid, r in rows.items() if r["status"] == "grader-error"
+                or "grader failed" in r["message"]], "never blame the grader for a submission"
+
+
+def test_no_bank_submission_is_blamed_on_the_grader(bank):
+    """Whatever a submission does, the grader itself never fails on it (issue 9)."""
+    blamed = {key: r["message"][:200] for key, r in bank["rows"].items()
+              if r["status"] == "grader-error" or "grader failed" in r["message"]}
+    assert not blamed
+
+
+def test_blank_release_is_unanswered_not_failed(bank):
+    """The untouched release: every auto-graded item 'unanswered', with what to do about it."""
+    for nb_name, src in SOURCES.items():
+        rows = {gid: r for (s, nb, gid), r in bank["rows"].items()
+                if s == f"adv_blank_release-{nb_name}" and nb == nb_name}
+        for name, tid, _ in src.graded:
+            assert rows[tid]["status"] == "unanswered"
+            kind = REGISTRY[name].kind
+            want = "string of option letters" if kind == "choice" else "not attempted"
+            assert want in rows[tid]["message"], rows[tid]["message"]
+    page = (bank["root"] / "out" / "report.html").read_text(encoding="utf-8")
+    assert "Grader errors (0)" in page
 
 
 def test_other_notebooks_of_a_student_are_missing(bank):
