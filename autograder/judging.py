@@ -108,12 +108,7 @@ def judge_choice(ex: Exercise, outcome: CaseOutcome) -> tuple[Verdict, str]:
     """``(verdict, reason)`` of a multiple-choice answer (its one "case" is the variable)."""
     if OutcomeKind(outcome.kind) is not OutcomeKind.RETURNED:
         return judge_case(ex, _NO_CASE, None, outcome)
-    value = outcome.value
-    if value is None or (isinstance(value, str) and not value.strip(" ,\t\n")):
-        example = sorted("".join(ex.options).lower() or "abcd")[-1]   # never the key
-        return Verdict.UNANSWERED, (f"no answer given: set {ex.name} to a string of option "
-                                    f"letters such as \"{example}\"")
-    why = same_choice(ex.answer, value, ex.options)
+    why = same_choice(ex.answer, outcome.value, ex.options, name=ex.name)
     if why is None:
         return Verdict.PASS, ""
     return Verdict(why.kind), why.text

@@ -60,7 +60,8 @@ def _mesh_rows(smoke: bool) -> list[Row]:
     naive_v = naive_mesh_volume(verts, faces)
     tm = trimesh.Trimesh(verts, faces, process=False)
     tm_v = float(tm.volume)
-    agree = math.isclose(ours_v, naive_v, rel_tol=1e-9) and math.isclose(ours_v, tm_v, rel_tol=1e-9)
+    agree = (math.isclose(ours_v, naive_v, rel_tol=1e-9, abs_tol=1e-12)
+             and math.isclose(ours_v, tm_v, rel_tol=1e-9, abs_tol=1e-12))
     ours = time_call(lambda: mesh_volume(verts, faces), repeat=5)["median"]
     naive = time_call(lambda: naive_mesh_volume(verts, faces), repeat=3, warmup=0)["median"]
 

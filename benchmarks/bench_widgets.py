@@ -89,7 +89,7 @@ def _target(slider, k: int):
         step = slider.step
         if not isinstance(slider, W.FloatLogSlider):
             value = lo + round((value - lo) / step) * step
-        if math.isclose(value, slider.value):
+        if math.isclose(value, slider.value, abs_tol=1e-12):
             value = lo + (hi - lo) * (1.0 - frac)
     return value
 

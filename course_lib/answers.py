@@ -28,7 +28,15 @@ _IGNORED = " ,\t\n"
 
 
 class ChoiceFormatError(ValueError):
-    """A multiple-choice answer that is not a string of option letters (or none was given)."""
+    """A multiple-choice answer that is not a string of option letters (or none was given).
+
+    ``unanswered`` is True when no answer was given at all (None, an empty string, only spaces
+    and commas), so a grader can tell "skipped" from "answered in the wrong form".
+    """
+
+    def __init__(self, message: str, *, unanswered: bool = False):
+        super().__init__(message)
+        self.unanswered = unanswered
 
 
 def choice_letters(answer, options: str = "abcd", *, name: str = "the answer",
@@ -61,7 +69,7 @@ def choice_letters(answer, options: str = "abcd", *, name: str = "the answer",
     letters = "".join(sorted(set(str(options).lower())))
     example = f'a string of option letters such as "{letters[-1]}"'
     if answer is None or answer is Ellipsis:
-        raise ChoiceFormatError(f"no answer given: set {name} to {example}")
+        raise ChoiceFormatError(f"no answer given: set {name} to {example}", unanswered=True)
     if not isinstance(answer, str):
         raise ChoiceFormatError(f"{name} must be {example}, not {type(answer).__name__}")
     text = answer.lower()
@@ -72,7 +80,7 @@ def choice_letters(answer, options: str = "abcd", *, name: str = "the answer",
                                 f"(spaces and commas are ignored); it holds {shown}")
     chosen = "".join(sorted({ch for ch in text if ch in letters}))
     if not chosen:
-        raise ChoiceFormatError(f"no answer given: set {name} to {example}")
+        raise ChoiceFormatError(f"no answer given: set {name} to {example}", unanswered=True)
     if single and len(chosen) != 1:
         raise ChoiceFormatError(f"choose exactly one option: got {answer.strip()!r}")
     return chosen

@@ -32,7 +32,9 @@ class Mismatch:
     counts as a wrong value. The grader classifies by ``kind``, never by the text.
     """
 
-    kind: str           #: "wrong-value" or "wrong-shape" (wrong shape, type or number of values)
+    #: "wrong-value", "wrong-shape" (wrong shape, type or number of values) or, for a choice
+    #: left blank, "unanswered"
+    kind: str
     text: str
 
     def __str__(self) -> str:
@@ -203,15 +205,16 @@ def choice_key(answer) -> str:
     return answer if isinstance(answer, str) else "".join(sorted(answer))
 
 
-def same_choice(expected, received, options="abcd") -> Mismatch | None:
+def same_choice(expected, received, options="abcd", name: str = "the answer") -> Mismatch | None:
     """Multiple choice: ``received`` normalised by :func:`course_lib.answers.choice_letters`
-    (case, spaces and commas ignored) against the key; a malformed answer is a wrong shape."""
+    (case, spaces and commas ignored) against the key. No answer at all is an ``unanswered``
+    mismatch, an answer of the wrong form a wrong shape, other letters a wrong value."""
     key = choice_key(expected)
     try:
-        got = choice_letters(received, "".join(options) or "abcd",
+        got = choice_letters(received, "".join(options) or "abcd", name=name,
                              single=isinstance(expected, str) and len(key) == 1)
     except ChoiceFormatError as exc:
-        return wrong_shape(str(exc))
+        return Mismatch("unanswered" if exc.unanswered else "wrong-shape", str(exc))
     return None if got == key else wrong_value("wrong answer")
 
 

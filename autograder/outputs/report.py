@@ -75,7 +75,7 @@ def render(results: list[CellResult], sources: list[SourceNotebook]) -> str:
             f"{sum(r.kind is not CellKind.MANUAL for r in results)} automatically graded cells. "
             "Written answers are marked in formgrader and are not included here.</p>"]
     body += _distributions(results, sources) + _most_failed_html(results)
-    body += _ungradeable_html(results) + _statuses_html(results)
+    body += _grader_errors_html(results) + _ungradeable_html(results) + _statuses_html(results)
     return page("tripos2006: grading report", body, _STYLE)
 
 
@@ -101,6 +101,19 @@ def _most_failed_html(results) -> list[str]:
         out.append(f"<tr><td>{e(row['notebook'])}</td><td>{e(row['grade_id'])}</td>"
                    f"<td>{row['lost']} of {row['students']}</td><td>{row['mean']:.0%}</td>"
                    f"<td>{e(how)}</td></tr>")
+    return out + ["</table>"]
+
+
+def _grader_errors_html(results) -> list[str]:
+    broken = [r for r in results if r.status is Status.GRADER_ERROR]
+    out = [f"<h2>Grader errors ({len(broken)})</h2>"]
+    if not broken:
+        return out + ["<p>None: every cell was graded.</p>"]
+    out.append("<p>The grader itself failed on these cells; the students are not to blame. Its "
+               "traceback is in the grading log: fix the cause and grade again.</p><table><tr>"
+               "<th>student</th><th>notebook</th><th>test</th><th>message</th></tr>")
+    out += [f"<tr><td>{e(r.student)}</td><td>{e(r.notebook)}</td><td>{e(r.grade_id)}</td>"
+            f"<td>{e(r.message)}</td></tr>" for r in broken]
     return out + ["</table>"]
 
 

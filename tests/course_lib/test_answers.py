@@ -17,8 +17,9 @@ def test_case_spaces_commas_and_order_are_ignored(given, want):
 
 @pytest.mark.parametrize("given", [None, "", "  ", " , "])
 def test_no_answer_says_so(given):
-    with pytest.raises(ChoiceFormatError, match="no answer given"):
+    with pytest.raises(ChoiceFormatError, match="no answer given") as info:
         choice_letters(given, "abcd", name="q5_x")
+    assert info.value.unanswered
 
 
 @pytest.mark.parametrize("given", [3, ["a"], 1.5, ("a",)])
@@ -28,8 +29,9 @@ def test_non_strings_are_refused_with_their_type(given):
 
 
 def test_letters_outside_the_options_are_named():
-    with pytest.raises(ValueError, match="'e'"):
+    with pytest.raises(ChoiceFormatError, match="'e'") as info:
         choice_letters("ae", "abcd")
+    assert not info.value.unanswered
     with pytest.raises(ValueError, match=r"'\('"):
         choice_letters("(a)", "abcd")
 

@@ -37,11 +37,14 @@ def _closed_meshes():
 
 def test_prism_of_a_flat_triangle():
     # unit right triangle at height 2 above the plane z = 0: area 1/2, height 2
-    assert mesh.triangle_projected_volume([0, 0, 2], [1, 0, 2], [0, 1, 2], [0, 0, 1]) == 1.0
+    assert (mesh.triangle_projected_volume([0, 0, 2], [1, 0, 2], [0, 1, 2], [0, 0, 1])
+            == pytest.approx(1.0, abs=1e-12))
     # clockwise seen from +z: negative
-    assert mesh.triangle_projected_volume([0, 0, 2], [0, 1, 2], [1, 0, 2], [0, 0, 1]) == -1.0
+    assert (mesh.triangle_projected_volume([0, 0, 2], [0, 1, 2], [1, 0, 2], [0, 0, 1])
+            == pytest.approx(-1.0, abs=1e-12))
     # the length of n does not matter
-    assert mesh.triangle_projected_volume([0, 0, 2], [1, 0, 2], [0, 1, 2], [0, 0, 7]) == 1.0
+    assert (mesh.triangle_projected_volume([0, 0, 2], [1, 0, 2], [0, 1, 2], [0, 0, 7])
+            == pytest.approx(1.0, abs=1e-12))
 
 
 def test_prism_volume_monte_carlo():

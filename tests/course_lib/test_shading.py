@@ -42,7 +42,7 @@ def test_exam_q5b_closed_form_terms():
     assert sh.reflect(L, N) @ V == pytest.approx(0.5 * (1 + 1 / SQ3))
     spec = (0.5 + 0.5 / SQ3) ** 10
     body = 0.5 + 0.25 * (1 - 1 / SQ3)
-    np.testing.assert_allclose(sh.phong(**sh.EXAM_Q5B), [spec, spec, spec + body], rtol=1e-12)
+    np.testing.assert_allclose(sh.phong(**sh.EXAM_Q5B), [spec, spec, spec + body], rtol=1e-12, atol=1e-12)
 
 
 def test_exam_forgetting_to_normalise_changes_the_answer():
@@ -55,7 +55,7 @@ def test_exam_forgetting_to_normalise_changes_the_answer():
     wrong_RV = (2 * wrong_LN * N - L) @ V
     wrong_blue = 0.5 + 0.5 * wrong_LN + max(wrong_RV, 0) ** 10
     assert abs(wrong_blue - 0.699) > 0.05
-    np.testing.assert_allclose(sh.phong(**exam(L=5 * L)), sh.phong(**sh.EXAM_Q5B), rtol=1e-12)
+    np.testing.assert_allclose(sh.phong(**exam(L=5 * L)), sh.phong(**sh.EXAM_Q5B), rtol=1e-12, atol=1e-12)
 
 
 # --------------------------------------------------------------------------------- normalize
@@ -76,7 +76,7 @@ def test_normalize_scale_invariant_and_parallel(v, s):
 
 def test_normalize_batch_and_errors():
     v = np.array([[3.0, 4.0, 0.0], [0.0, 0.0, -2.0]])
-    np.testing.assert_allclose(sh.normalize(v), [[0.6, 0.8, 0.0], [0.0, 0.0, -1.0]])
+    np.testing.assert_allclose(sh.normalize(v), [[0.6, 0.8, 0.0], [0.0, 0.0, -1.0]], atol=1e-12)
     with pytest.raises(ValueError, match="zero-length"):
         sh.normalize([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
     with pytest.raises(ValueError):
@@ -107,16 +107,16 @@ def test_reflect_angle_of_incidence_equals_angle_of_reflection(L, N):
 
 def test_reflect_known_values_and_batches():
     # a ray coming in at 45 degrees onto the floor goes out at 45 degrees
-    np.testing.assert_allclose(sh.reflect([1.0, 1.0, 0.0], [0.0, 1.0, 0.0]), [-1.0, 1.0, 0.0])
+    np.testing.assert_allclose(sh.reflect([1.0, 1.0, 0.0], [0.0, 1.0, 0.0]), [-1.0, 1.0, 0.0], atol=1e-12)
     # normal incidence: R = L; grazing: R = -L
-    np.testing.assert_allclose(sh.reflect([0.0, 0.0, 2.0], [0.0, 0.0, 5.0]), [0.0, 0.0, 2.0])
-    np.testing.assert_allclose(sh.reflect([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]), [-1.0, 0.0, 0.0])
+    np.testing.assert_allclose(sh.reflect([0.0, 0.0, 2.0], [0.0, 0.0, 5.0]), [0.0, 0.0, 2.0], atol=1e-12)
+    np.testing.assert_allclose(sh.reflect([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]), [-1.0, 0.0, 0.0], atol=1e-12)
     rng = np.random.default_rng(0)
     L, N = rng.normal(size=(7, 3)), rng.normal(size=(7, 3))
     batch = sh.reflect(L, N)
     assert batch.shape == (7, 3)
     for i in range(7):
-        np.testing.assert_allclose(batch[i], sh.reflect(L[i], N[i]), rtol=1e-12)
+        np.testing.assert_allclose(batch[i], sh.reflect(L[i], N[i]), rtol=1e-12, atol=1e-12)
     # one normal for a batch of lights
     assert sh.reflect(L, N[0]).shape == (7, 3)
 
@@ -167,7 +167,7 @@ def test_mirror_direction_gives_full_highlight(model):
         Ia, ka, Ip, kd, ks, n = 0.7, 0.3, 1.5, 0.6, 0.4, rng.uniform(1, 100)
         expected = colour * (Ia * ka + Ip * kd * (L @ N)) + Ip * ks
         np.testing.assert_allclose(model(colour, Ia, ka, Ip, kd, ks, n, L, N, V), expected,
-                                   rtol=1e-9)
+                                   rtol=1e-9, atol=1e-12)
         np.testing.assert_allclose(sh.halfway(L, V), N, atol=1e-9)
 
 
@@ -178,9 +178,10 @@ def test_no_specular_at_grazing_or_behind(model):
     N = np.array([0.0, 0.0, 1.0])
     colour = np.array([0.2, 0.5, 0.9])
     for L, V in (([1.0, 0.0, 0.0], [-1.0, 0.0, 0.01]), ([1.0, 0.0, -0.5], [-1.0, 0.0, -0.5])):
+        # exactly 0 by construction: the diffuse factor is clamped with max(L.N, 0)
         assert sh.phong_terms(L, N, sh.reflect(L, N), 1.0)[1] == 0.0
         out = model(colour, 2.0, 0.25, 1.0, 0.8, 1.0, 5, L, N, V)
-        np.testing.assert_allclose(out, colour * 0.5, rtol=1e-12)
+        np.testing.assert_allclose(out, colour * 0.5, rtol=1e-12, atol=1e-12)
 
 
 def test_specular_clamped_when_reflection_points_away():
@@ -226,22 +227,22 @@ def test_batch_equals_one_by_one():
         assert batch.shape == (11, 3)
         for i in range(11):
             one = model(colour[i], 1.0, 0.3, 0.9, 0.6, 0.8, 12, L[i], N[i], V[i])
-            np.testing.assert_allclose(batch[i], one, rtol=1e-12)
+            np.testing.assert_allclose(batch[i], one, rtol=1e-12, atol=1e-12)
     # one colour for many normals, and many colours for one geometry
     assert sh.phong((1, 0, 0), 1, 0.3, 1, 0.6, 0.8, 12, L[0], N, V[0]).shape == (11, 3)
     assert sh.phong(colour, 1, 0.3, 1, 0.6, 0.8, 12, L[0], N[0], V[0]).shape == (11, 3)
     # a scalar colour is grey
     np.testing.assert_allclose(sh.phong(0.4, 1, 0.3, 1, 0.6, 0.8, 12, L[0], N[0], V[0]),
-                               sh.phong((0.4,) * 3, 1, 0.3, 1, 0.6, 0.8, 12, L[0], N[0], V[0]))
+                               sh.phong((0.4,) * 3, 1, 0.3, 1, 0.6, 0.8, 12, L[0], N[0], V[0]), atol=1e-12)
 
 
 def test_terms_separately():
     """Each coefficient scales its own term: ambient only, diffuse only (Lambert's cosine)."""
     L, N, V = [0.0, 1.0, 1.0], [0.0, 0.0, 3.0], [1.0, 0.0, 1.0]
     c = np.array([0.1, 0.2, 0.3])
-    np.testing.assert_allclose(sh.phong(c, 2.0, 0.5, 1.0, 0.0, 0.0, 5, L, N, V), c * 1.0)
+    np.testing.assert_allclose(sh.phong(c, 2.0, 0.5, 1.0, 0.0, 0.0, 5, L, N, V), c * 1.0, atol=1e-12)
     np.testing.assert_allclose(sh.phong(c, 0.0, 0.5, 2.0, 0.5, 0.0, 5, L, N, V),
-                               c * np.cos(np.pi / 4))
+                               c * np.cos(np.pi / 4), atol=1e-12)
 
 
 @pytest.mark.parametrize("bad, match", [
@@ -284,7 +285,7 @@ def test_sphere_pixels_match_hand_computed_normals():
         N = np.array([x, y, np.sqrt(1 - x * x - y * y)])
         np.testing.assert_allclose(img[r, c], sh.phong((0.2, 0.4, 0.8), 1.0, 0.2, 1.0, 0.7,
                                                        0.6, 15, (1.0, 2.0, 3.0), N,
-                                                       (0.0, 0.0, 1.0)), rtol=1e-12)
+                                                       (0.0, 0.0, 1.0)), rtol=1e-12, atol=1e-12)
 
 
 def _random_light_viewer(rng):
@@ -318,7 +319,7 @@ def test_sphere_highlight_none_when_light_behind():
     assert hl is None
     disc = img[img[..., 0] > 0]
     assert len(disc) > 300
-    np.testing.assert_allclose(disc, np.broadcast_to([0.1, 0.0, 0.0], disc.shape))
+    np.testing.assert_allclose(disc, np.broadcast_to([0.1, 0.0, 0.0], disc.shape), atol=1e-12)
 
 
 def test_sphere_phong_highlight_tighter_than_blinn_same_exponent():
@@ -338,7 +339,7 @@ def test_view_basis_is_right_handed_and_orthonormal():
         B = sh.view_basis(V)
         np.testing.assert_allclose(B @ B.T, np.eye(3), atol=1e-12)
         assert np.linalg.det(B) == pytest.approx(1.0)
-        np.testing.assert_allclose(B[2], V / np.linalg.norm(V))
+        np.testing.assert_allclose(B[2], V / np.linalg.norm(V), atol=1e-12)
 
 
 def test_render_errors():
@@ -364,7 +365,7 @@ def test_figures_draw_what_the_maths_says():
 
     art = ps.plot_reflection_vectors(incidence_deg=30.0, view_deg=-10.0)
     # the R arrow ends at the mirror image of L: (sin 30, cos 30)
-    np.testing.assert_allclose(art["R"][0].xy, (np.sin(np.radians(30)), np.cos(np.radians(30))))
+    np.testing.assert_allclose(art["R"][0].xy, (np.sin(np.radians(30)), np.cos(np.radians(30))), atol=1e-12)
     plt.close("all")
 
     L, V = (1.0, -1.0, 1.0), (0.0, -1.0, 0.2)
@@ -381,6 +382,6 @@ def test_figures_draw_what_the_maths_says():
     cases = ps.ALIASING_CASES[-1:]
     art = ps.plot_aliasing_swatches(cases, ns=(9,))
     _, err = spectral.colour_aliasing(cases[0][1], cases[0][2], (9,))
-    np.testing.assert_allclose(art["errors"][0], err)
+    np.testing.assert_allclose(art["errors"][0], err, atol=1e-12)
     assert art["image"].get_array().shape == (1, 3, 3)
     plt.close("all")

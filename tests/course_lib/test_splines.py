@@ -63,7 +63,7 @@ def test_unit_vector_geometry_gives_the_weight_rows():
     p, p1, p2 = S.end_derivatives(CR, *np.eye(4))
     np.testing.assert_allclose(np.array([p, p1, p2]),
                                [[0, 0, 1, 0], [0, -0.5, 0, 0.5], [-1, 4, -5, 2]], atol=1e-15)
-    np.testing.assert_allclose(S.spline_eval(BS, np.eye(4), 1.0, 0), [0, 1 / 6, 4 / 6, 1 / 6])
+    np.testing.assert_allclose(S.spline_eval(BS, np.eye(4), 1.0, 0), [0, 1 / 6, 4 / 6, 1 / 6], atol=1e-12)
 
 
 # ------------------------------------------------------------------------------------------
@@ -99,7 +99,7 @@ def test_catmull_rom_d_equals_2c_minus_b(abc):
     """Q4(c)(i), Fig. 1(b): p = c, p' = c - b, p'' = -a + 2b - c."""
     a, b, c = abc
     d = S.phantom_point(b, c, "d=2c-b")
-    np.testing.assert_allclose(d, 2 * c - b)
+    np.testing.assert_allclose(d, 2 * c - b, atol=1e-12)
     p, p1, p2 = S.end_derivatives(CR, a, b, c, d)
     np.testing.assert_allclose(p, c, atol=1e-14)
     np.testing.assert_allclose(p1, c - b, atol=1e-14)
@@ -201,7 +201,7 @@ def test_convex_hull_matches_scipy_and_shapely():
         ref = P[ConvexHull(P).vertices]  # scipy: counter-clockwise in 2-D
         assert len(H) == len(ref)
         start = int(np.argmin(np.linalg.norm(ref - H[0], axis=1)))
-        np.testing.assert_allclose(np.roll(ref, -start, axis=0), H)
+        np.testing.assert_allclose(np.roll(ref, -start, axis=0), H, atol=1e-12)
         assert shapely.Polygon(H).area == pytest.approx(shapely.MultiPoint(P).convex_hull.area)
         Q = rng.normal(scale=1.5, size=(50, 2))
         inside = shapely.contains_xy(shapely.Polygon(H), Q[:, 0], Q[:, 1])
@@ -223,9 +223,9 @@ def test_parameter_row_shapes_and_derivatives():
     t = np.array([0.0, 0.25, 2.0])
     assert S.parameter_row(0.5).shape == (4,)
     assert S.parameter_row(t, 1).shape == (3, 4)
-    np.testing.assert_allclose(S.parameter_row(t, 0)[:, 0], t**3)
-    np.testing.assert_allclose(S.parameter_row(t, 1)[:, 0], 3 * t**2)
-    np.testing.assert_allclose(S.parameter_row(t, 2), np.c_[6 * t, 2 + 0 * t, 0 * t, 0 * t])
+    np.testing.assert_allclose(S.parameter_row(t, 0)[:, 0], t**3, atol=1e-12)
+    np.testing.assert_allclose(S.parameter_row(t, 1)[:, 0], 3 * t**2, atol=1e-12)
+    np.testing.assert_allclose(S.parameter_row(t, 2), np.c_[6 * t, 2 + 0 * t, 0 * t, 0 * t], atol=1e-12)
 
 
 def test_spline_eval_shapes():
@@ -382,7 +382,7 @@ def test_catmull_rom_is_not_c2():
     jump = S.spline_eval(CR, Gs[1], 0.0, 2) - S.spline_eval(CR, Gs[0], 1.0, 2)
     # by the exam's rows: p''(1) of [a b c d] is -a+4b-5c+2d, p''(0) of [b c d e] is 2b-5c+4d-e
     a, b, c, d, e = P
-    np.testing.assert_allclose(jump, (2 * b - 5 * c + 4 * d - e) - (-a + 4 * b - 5 * c + 2 * d))
+    np.testing.assert_allclose(jump, (2 * b - 5 * c + 4 * d - e) - (-a + 4 * b - 5 * c + 2 * d), atol=1e-12)
     assert np.linalg.norm(jump) > 1.0
 
 

@@ -86,14 +86,14 @@ def test_displayed_depths_from_echo_times():
     thick = np.array([3.0, 12.0, 0.5, 7.0])
     c = np.array([1480.0, 1600.0, 2500.0, 1450.0])
     arrival = np.array([2 * sum(thick[: i + 1] / c[: i + 1]) for i in range(4)])  # per mm
-    np.testing.assert_allclose(displayed_depths(thick, c), C0 * arrival / 2, rtol=1e-12)
+    np.testing.assert_allclose(displayed_depths(thick, c), C0 * arrival / 2, rtol=1e-12, atol=1e-12)
 
 
 def test_displayed_thickness_broadcasts_and_returns_float_for_scalars():
     assert type(displayed_thickness(10.0, 1500.0)) is float
     out = displayed_thickness(np.ones((3, 1)), np.array([1400.0, 1540.0, 1700.0]))
     assert out.shape == (3, 3)
-    np.testing.assert_allclose(out[0], [1540 / 1400, 1.0, 1540 / 1700])
+    np.testing.assert_allclose(out[0], [1540 / 1400, 1.0, 1540 / 1700], atol=1e-12)
 
 
 # --------------------------------------------------------------------------------------------
@@ -156,7 +156,7 @@ def test_displayed_depths_are_cumulative(layers, ca):
     assert np.all(np.diff(depths) >= 0)
     # adding a layer underneath does not move the faces above it
     more = displayed_depths(np.append(thick, 5.0), np.append(c, 1600.0), ca)
-    np.testing.assert_allclose(more[:-1], depths, rtol=1e-12)
+    np.testing.assert_allclose(more[:-1], depths, rtol=1e-12, atol=1e-12)
 
 
 # --------------------------------------------------------------------------------------------
@@ -255,17 +255,17 @@ def test_phantom_interfaces_by_hand():
     ph = us.exam_phantom()
     x = np.array([5.0, 17.5, 42.5, 67.5])  # gap, fat, liver, water
     _xs, true, shown = us.phantom_interfaces(ph["blocks"], ph["floor_depth"], ph["width"], x=x)
-    np.testing.assert_allclose(true[0, :1], [60.0])
+    np.testing.assert_allclose(true[0, :1], [60.0], atol=1e-12)
     assert np.all(np.isnan(true[0, 1:]))
-    np.testing.assert_allclose(true[1:], [[10, 50, 60]] * 3)
+    np.testing.assert_allclose(true[1:], [[10, 50, 60]] * 3, atol=1e-12)
     k = 1540.0
     water = 10 * k / C_WATER
     np.testing.assert_allclose(shown[1], [water, water + 40 * k / C_FAT,
-                                          2 * water + 40 * k / C_FAT])
+                                          2 * water + 40 * k / C_FAT], atol=1e-12)
     np.testing.assert_allclose(shown[2], [water, water + 40 * k / C_LIVER,
-                                          2 * water + 40 * k / C_LIVER])
-    np.testing.assert_allclose(shown[3], [water, 5 * water, 6 * water])
-    np.testing.assert_allclose(shown[0, 0], 6 * water)
+                                          2 * water + 40 * k / C_LIVER], atol=1e-12)
+    np.testing.assert_allclose(shown[3], [water, 5 * water, 6 * water], atol=1e-12)
+    np.testing.assert_allclose(shown[0, 0], 6 * water, atol=1e-12)
 
 
 def test_simulator_returns_drawable_arrays(scan):
@@ -374,7 +374,7 @@ def test_speed_override_moves_the_displayed_interfaces():
     x = np.array([42.5])
     _, _, shown = us.phantom_interfaces(ph["blocks"], ph["floor_depth"], ph["width"], x=x,
                                         speeds={"liver": 1540.0})
-    np.testing.assert_allclose(shown[0, 1] - shown[0, 0], 40.0)
+    np.testing.assert_allclose(shown[0, 1] - shown[0, 0], 40.0, atol=1e-12)
 
 
 @pytest.mark.parametrize("kwargs", [
@@ -425,9 +425,9 @@ def test_figures_draw_true_and_displayed_geometry():
         assert fat_shown.max() == pytest.approx(water + 40 * C0 / C_FAT)
         xs, floor = (np.asarray(a) for a in bscan["displayed"][-1].get_data())
         under_liver = floor[(xs > 36) & (xs < 49)]
-        np.testing.assert_allclose(under_liver, 2 * water + 40 * C0 / C_LIVER)
+        np.testing.assert_allclose(under_liver, 2 * water + 40 * C0 / C_LIVER, atol=1e-12)
         in_gap = floor[xs < 9]
-        np.testing.assert_allclose(in_gap, 6 * water)
+        np.testing.assert_allclose(in_gap, 6 * water, atol=1e-12)
     finally:
         plt.close(fig)
 
@@ -445,7 +445,7 @@ def test_aline_figure_plots_the_envelope_in_db():
         d, level = art["lines"][0].get_data()
         np.testing.assert_array_equal(d, depth)
         j = int(np.argmin(np.abs(x - 42.5)))
-        np.testing.assert_allclose(level, 20 * np.log10(np.maximum(env[:, j], 1e-6)), rtol=1e-6)
+        np.testing.assert_allclose(level, 20 * np.log10(np.maximum(env[:, j], 1e-6)), rtol=1e-6, atol=1e-12)
         assert len(art["markers"]) == 4  # three interfaces under the liver + the true floor
     finally:
         plt.close(fig)

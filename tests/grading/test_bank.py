@@ -434,6 +434,9 @@ ISSUE_9: dict[str, Adversary] = {
     "adv_choice_deleted": _no_answer("choice", None, "missing", "deleted"),
     "adv_choice_none": _no_answer("choice", "{name} = None\n", "unanswered", "None"),
     "adv_choice_blank": _no_answer("choice", "{name} = ' '\n", "unanswered", "no answer"),
+    "adv_choice_spaces": _no_answer("choice", "{name} = ' , '\n", "unanswered", "no answer"),
+    "adv_choice_bad_letters": _no_answer("choice", "{name} = '(b)'\n", "failed",
+                                         "may hold only the letters"),
     "adv_choice_number": _no_answer("choice", "{name} = 2\n", "failed", "string of option"),
     "adv_choice_list": _no_answer("choice", "{name} = ['a']\n", "failed", "string of option"),
     "adv_release": Adversary(lambda src, ctx: {f"{src.name}.ipynb": release_version(src)},
@@ -610,6 +613,8 @@ def test_bank_case(bank, adv, notebook):
     if "answer" in words:
         name = target_of(src) if adv.startswith("adv_fn") else _choice_of(src)
         assert words["answer"] in rows[f"test_{name}"]["message"]
+    assert not [gid for gid, r in rows.items() if r["status"] == "grader-error"
+                or "grader failed" in r["message"]], "never blame the grader for a submission"
 
 
 def test_no_bank_submission_is_a_grader_error(bank):
@@ -624,6 +629,17 @@ def test_unanswered_items_are_not_grader_failures_in_the_report(bank):
     table = page.split("Most-failed tests", 1)[1].split("</table>", 1)[0]
     assert "grader-error" not in table
     assert "unanswered" in table
+    assert "Grader errors (0)" in page
+
+
+def test_blank_release_is_unanswered_not_failed(bank):
+    """The untouched release: every auto-graded item 'unanswered', with what to do about it."""
+    for nb_name, src in SOURCES.items():
+        rows = {gid: r for (s, nb, gid), r in bank["rows"].items()
+                if s == f"adv_release-{nb_name}" and nb == nb_name}
+        for _name, tid, _ in src.graded:
+            assert rows[tid]["status"] == "unanswered"
+            assert "released stub" in rows[tid]["message"], rows[tid]["message"]
 
 
 def test_other_notebooks_of_a_student_are_missing(bank):

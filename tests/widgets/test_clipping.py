@@ -44,7 +44,7 @@ def test_exam_triangle_far_plane(exam):
     exam.step.value = 6
     assert cyclic_match(A_CLIPPED_YZ, poly.get_xy()[:-1])
     xs, ys, zs = exam.art3d["vertices"].get_data_3d()
-    np.testing.assert_allclose(xs, 0)                       # edge-on: x_s = 0 throughout
+    np.testing.assert_allclose(xs, 0, atol=1e-12)                       # edge-on: x_s = 0 throughout
     assert cyclic_match(A_CLIPPED_YZ, np.c_[ys, zs])
     assert "far" in exam.status.get_text() and "4 vertices" in exam.status.get_text()
     assert exam.art3d["plane"].get_visible()
@@ -70,7 +70,7 @@ def test_moving_a_vertex_inside_removes_the_cut(exam):
     exam.vertex.value = 2
     assert [s.value for s in exam.coord_sliders] == pytest.approx(A_H[2])   # sliders synced
     exam.coord_sliders[2].value = 1.5
-    np.testing.assert_allclose(exam.P[2], [0, 1, 1.5, 2])
+    np.testing.assert_allclose(exam.P[2], [0, 1, 1.5, 2], atol=1e-12)
     expected = np.array([[0, 0.5], [0.5, 0.5], [0.5, 0.75]])
     assert cyclic_match(expected, exam.art2d["clipped"].get_xy()[:-1])
     assert "3 vertices" in exam.status.get_text()

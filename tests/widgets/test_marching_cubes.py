@@ -50,10 +50,10 @@ def expected_points(index, iso):
 
 def test_case_one_single_triangle_moves_with_iso(ex):
     assert drawn(ex).shape == (1, 3, 3)
-    np.testing.assert_allclose(np.sort(drawn(ex)[0], axis=0), np.sort(0.5 * np.eye(3), axis=0))
+    np.testing.assert_allclose(np.sort(drawn(ex)[0], axis=0), np.sort(0.5 * np.eye(3), axis=0), atol=1e-12)
     ex.iso.value = 0.25
     got = drawn(ex)[0]
-    np.testing.assert_allclose(sorted(map(tuple, got)), sorted(map(tuple, 0.25 * np.eye(3))))
+    np.testing.assert_allclose(sorted(map(tuple, got)), sorted(map(tuple, 0.25 * np.eye(3))), atol=1e-12)
     # the triangle faces away from the inside corner (the origin): normal along +(1, 1, 1)
     n = np.cross(got[1] - got[0], got[2] - got[0])
     assert np.all(n > 0)
@@ -156,7 +156,7 @@ def test_hole_figure_outlines_the_hole():
     art = plots.plot_hole()
     segs = np.asarray(art["hole"]._segments3d, float)        # the red outline, (4, 2, 3)
     assert segs.shape == (4, 2, 3)
-    np.testing.assert_allclose(segs[:, :, 0], 2.0)          # in the shared face x = 2
+    np.testing.assert_allclose(segs[:, :, 0], 2.0, atol=1e-12)          # in the shared face x = 2
     # the outline is a closed loop: every end point is used by exactly two segments
     _, counts = np.unique(np.round(segs.reshape(-1, 3), 9), axis=0, return_counts=True)
     assert np.all(counts == 2)

@@ -128,16 +128,16 @@ def test_sliders_move_the_selected_point(ex):
     ex.rule.value = "d=2c-b"
     ex.point.value = len(P) - 1  # c
     ex.x.value, ex.y.value = 5.0, 2.0
-    np.testing.assert_allclose(ex.points[-1], [5.0, 2.0])
+    np.testing.assert_allclose(ex.points[-1], [5.0, 2.0], atol=1e-12)
     np.testing.assert_allclose(end_marker(ex), [5.0, 2.0], atol=1e-12)  # CR interpolates c
-    np.testing.assert_allclose(ex.art["phantom"].get_data()[0][-1], 2 * 5.0 - B[0])
+    np.testing.assert_allclose(ex.art["phantom"].get_data()[0][-1], 2 * 5.0 - B[0], atol=1e-12)
 
 
 def test_free_phantom_point(ex):
     ex.kind.value = "b-spline"
     ex.rule.value = "d=c"
     ex.rule.value = "free"  # the free phantoms start where d = c put them
-    np.testing.assert_allclose(ex.phantoms[1], C)
+    np.testing.assert_allclose(ex.phantoms[1], C, atol=1e-12)
     np.testing.assert_allclose(end_marker(ex), (B + 5 * C) / 6, atol=1e-12)
     ex.point.value = "end"
     ex.x.value, ex.y.value = 7.0, 3.0
@@ -205,14 +205,14 @@ def test_end_rules_figure_matches_the_exam():
     fig, arts = plots.plot_end_rules(P)
     end = {(i, j): np.array([v[0] for v in arts[i][j]["end"].get_data()])
            for i in range(2) for j in range(2)}
-    np.testing.assert_allclose(end[0, 0], C)
-    np.testing.assert_allclose(end[0, 1], C)
-    np.testing.assert_allclose(end[1, 0], (2 * B + 4 * C) / 6)
-    np.testing.assert_allclose(end[1, 1], C)
+    np.testing.assert_allclose(end[0, 0], C, atol=1e-12)
+    np.testing.assert_allclose(end[0, 1], C, atol=1e-12)
+    np.testing.assert_allclose(end[1, 0], (2 * B + 4 * C) / 6, atol=1e-12)
+    np.testing.assert_allclose(end[1, 1], C, atol=1e-12)
     # every curve starts at the first point's side, not at 'a': the first drawn point of the
     # Catmull-Rom curve is P[0] itself
     first = np.column_stack(arts[0][0]["segments"][0].get_data())[0]
-    np.testing.assert_allclose(first, P[0])
+    np.testing.assert_allclose(first, P[0], atol=1e-12)
     plt.close(fig)
 
 
