@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import sys
 import time
 import traceback
@@ -109,8 +110,10 @@ def main(args: argparse.Namespace) -> int:
     t0 = time.monotonic()
     batch = grade_batch(args.submitted, sources, _options(args, secret, mode))
     _write_outputs(batch, sources, args)
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"graded {len(batch.students)} students, {len(batch.results)} cells in "
-          f"{time.monotonic() - t0:.0f} s: {args.out / 'grades.csv'}", file=sys.stderr)
+          f"{time.monotonic() - t0:.0f} s (grader peak memory {peak_mb:.0f} MB): "
+          f"{args.out / 'grades.csv'}", file=sys.stderr)
     return 0
 
 

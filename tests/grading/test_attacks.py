@@ -583,6 +583,8 @@ def test_odd_student_ids_are_skipped_and_harm_no_one(redteam):
 def test_attack_batch_is_bounded(redteam):
     assert redteam["proc"].returncode == 0
     assert redteam["elapsed"] < 240
+    peak = re.search(r"grader peak memory (\d+) MB", redteam["proc"].stderr)
+    assert peak and int(peak.group(1)) < 1024, "the grader stays small whatever students return"
 
 
 # --------------------------------------------------------------------------------------------
