@@ -237,7 +237,9 @@ class FrameReader:
             return "garbage", None
         return ("record", (rec, raw)) if type(rec) is dict else ("garbage", None)
 
-    def next(self, deadline: float):
+    def next(self, deadline: float, alive=None):
+        """The next event; ``alive()`` (if given) is asked whenever the pipe is quiet, and a
+        False answer is an ``"eof"`` (a writer may die while a child of it holds the pipe)."""
         import select
 
         while True:
@@ -248,7 +250,9 @@ class FrameReader:
             left = deadline - time.monotonic()
             if left <= 0:
                 return "timeout", None
-            if not select.select([self.fd], [], [], min(left, 1.0))[0]:
+            if not select.select([self.fd], [], [], min(left, 0.1 if alive else 1.0))[0]:
+                if alive is not None and not alive():
+                    return "eof", None
                 continue
             want = FRAME.size + self.frame_cap - len(self.buf)
             if self.total_cap is not None:
@@ -316,7 +320,7 @@ def _describe_status(status: int) -> str:
             name = signal.Signals(sig).name
         except ValueError:
             name = f"signal {sig}"
-        hint = {"SIGKILL": " (probably out of memory)", "SIGSEGV": " (a segmentation fault)",
+        hint = {"SIGKILL": " (out of memory, or killed)", "SIGSEGV": " (a segmentation fault)",
                 "SIGXCPU": " (out of CPU time)", "SIGABRT": " (aborted)"}.get(name, "")
         return f"the process was killed by {name}{hint}"
     return f"the process exited with code {os.WEXITSTATUS(status)}"
@@ -611,6 +615,7 @@ class NameSupervisor:
         self.timeouts = 0          # timeouts in a row
         self.label = "?"           # the cell running now
         self.pid = 0
+        self.status = None         # the worker's wait status, once collected
 
     def emit(self, rec: dict) -> None:
         rec.setdefault("name", self.nj["name"])
@@ -656,7 +661,7 @@ class NameSupervisor:
             os.close(self.channel)
             worker_main(self.nj, self.ns, self.next, self.limits, wfd)
         os.close(wfd)
-        self.pid = pid
+        self.pid, self.status = pid, None
         try:
             return self.watch(FrameReader(rfd, self.frame_cap()))
         finally:
@@ -670,7 +675,7 @@ class NameSupervisor:
         loading, started = True, time.monotonic()
         deadline = started + float(self.limits["load_timeout"]) + GRACE
         while True:
-            event, payload = reader.next(deadline)
+            event, payload = reader.next(deadline, self.worker_alive)
             if event != "record":
                 return self.failed(event, loading, started)
             rec, raw = payload
@@ -703,18 +708,24 @@ class NameSupervisor:
             else:
                 return self.failed("garbage", loading, started)
 
-    def exit_status(self, wait: float) -> str:
-        end = time.monotonic() + wait
-        while True:
+    def worker_alive(self) -> bool:
+        """False once the worker has exited (its wait status is kept)."""
+        if self.status is None:
             try:
                 pid, status = os.waitpid(self.pid, os.WNOHANG)
             except ChildProcessError:
-                return "the process ended"
+                pid, status = self.pid, 0
             if pid:
-                return _describe_status(status)
+                self.status = status
+        return self.status is None
+
+    def exit_status(self, wait: float) -> str:
+        end = time.monotonic() + wait
+        while self.worker_alive():
             if time.monotonic() >= end:
                 return "the process stopped responding"
             time.sleep(0.005)
+        return _describe_status(self.status)
 
     def failed(self, event: str, loading: bool, started: float) -> bool:
         """The worker died, hung or sent something wrong: settle what it left, decide."""
@@ -804,8 +815,9 @@ def main(argv: list) -> None:
         job = json.loads(f.read())
     limits = job["limits"]
     _set_rlimits(limits, float(limits["budget_seconds"]))
-    if opts["--site"]:
-        sys.path.append(opts["--site"])
+    # the interpreter's own standard library, then the site dir (NumPy, the allowed tables)
+    stdlib = [p for p in sys.path if p.startswith(sys.base_prefix + os.sep)]
+    sys.path[:] = stdlib + ([opts["--site"]] if opts["--site"] else [])
     import builtins
 
     import numpy  # noqa: F401 - imported once here, inherited by every worker
