@@ -267,6 +267,58 @@ def test_processes_cannot_outlive_the_job_or_reach_another_job(mode):
     assert identity.uid_processes(evil_uid) == [] and sandbox_uids_alive() == []
 
 
+def test_fork_bomb_is_contained_and_cleared(mode):
+    bomb = fn("bomb", """
+        import os
+        def bomb(k):
+            if k == 0:
+                while True:
+                    try:
+                        os.fork()
+                    except OSError:
+                        pass
+            return k
+        """, cases=[(0,), (1,)])
+    t0 = time.monotonic()
+    runs = run(mode, bomb, limits=Limits(case_timeout=2.0, pids=32))["bomb"]
+    assert kinds(runs) == [K.TIMEOUT, K.RETURNED] and runs.outcomes[1].value == 1
+    assert time.monotonic() - t0 < 30
+    assert sandbox_uids_alive() == []
+
+
+def test_the_job_budget_kills_the_whole_sandbox(mode, monkeypatch):
+    from autograder.isolation import runner
+
+    monkeypatch.setattr(runner, "job_budget", lambda job, limits: 4.0)
+    sleeper = fn("sleeper", """
+        import os, time
+        def sleeper(k):
+            if os.fork() == 0:
+                os.setsid()
+                time.sleep(60)
+            time.sleep(60)
+        """, cases=[(0,), (1,)])
+    t0 = time.monotonic()
+    runs = run(mode, sleeper, limits=Limits(case_timeout=120.0))["sleeper"]
+    assert time.monotonic() - t0 < 15
+    assert kinds(runs) == [K.NOT_RUN, K.NOT_RUN]
+    assert runs.outcomes[0].message == "not run: the job's time ran out"
+    assert sandbox_uids_alive() == []
+
+
+def test_two_grading_processes_get_distinct_uids(mode):
+    script = textwrap.dedent("""
+        from autograder.isolation import CaseInput, Limits, NameJob, NotebookJob, probe, run_notebook
+        src = "import os, time\\ndef u():\\n    time.sleep(1.5)\\n    return os.getuid()\\n"
+        job = NotebookJob("p", "", [NameJob("u", "function", [("a", src)], [CaseInput((), {})])])
+        print(run_notebook(job, Limits(), probe())["u"].outcomes[0].value)
+        """)
+    procs = [subprocess.Popen([sys.executable, "-c", script], cwd=REPO, text=True,
+                              stdout=subprocess.PIPE) for _ in range(2)]
+    uids = [int(p.communicate(timeout=120)[0].strip()) for p in procs]
+    assert len(set(uids)) == 2 and 0 not in uids
+
+
 def test_no_network_even_from_c(mode):
     server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
     server.bind(("127.0.0.1", 0))
