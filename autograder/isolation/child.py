@@ -37,6 +37,7 @@ import time
 
 FRAME = struct.Struct(">I")        #: the length prefix of every record
 MAX_DEPTH = 8                      #: containers nested deeper are rejected
+MAX_INT_BITS = 4096                #: larger ints are rejected (JSON would need > 1233 digits)
 SCALAR_COST = 1                    #: budget bytes charged per scalar / container element
 RECORD_OVERHEAD = 64 * 1024        #: bytes a record may take beyond its value and its prints
 GRACE = 1.0                        #: seconds the supervisor waits beyond a worker's own alarm
@@ -91,6 +92,8 @@ def encode_value(v, budget: Budget, depth: int = 0):
     if depth > MAX_DEPTH:
         raise NotPlain(f"a structure nested more than {MAX_DEPTH} deep")
     t = type(v)
+    if t is int and v.bit_length() > MAX_INT_BITS:
+        raise NotPlain(f"an int of more than {MAX_INT_BITS} bits")
     if v is None or t is bool or t is int or t is float:
         budget.spend(SCALAR_COST)
         return v
@@ -512,7 +515,11 @@ def _case_record(nj: dict, i: int, ns: dict, limits: dict, reference: str, captu
         rec = {"kind": "not-run", "message": f"{nj['name']!r} is not defined after its cells"}
     rec.update(t="case", name=nj["name"], i=i, seconds=time.monotonic() - t0,
                printed=capture.take())
-    data = frame(rec)
+    try:
+        data = frame(rec)
+    except (ValueError, TypeError, RecursionError):
+        rec.update(kind="rejected", value=None, message="the result could not be encoded")
+        data = frame(rec)
     if len(data) > record_cap(case["cap"], limits["output_bytes"]):
         rec.update(kind="rejected", value=None, printed=rec["printed"][:1000],
                    message=f"result too large (more than {case['cap']} bytes)")
@@ -656,10 +663,13 @@ class NameSupervisor:
             os.close(wfd)
             self.settle_rest("crashed", f"could not start a process ({exc.strerror})")
             return False
-        if pid == 0:
-            os.close(rfd)
-            os.close(self.channel)
-            worker_main(self.nj, self.ns, self.next, self.limits, wfd)
+        if pid == 0:   # the worker: never returns into the supervisor's code
+            try:
+                os.close(rfd)
+                os.close(self.channel)
+                worker_main(self.nj, self.ns, self.next, self.limits, wfd)
+            finally:
+                os._exit(70)
         os.close(wfd)
         self.pid, self.status = pid, None
         try:

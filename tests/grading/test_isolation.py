@@ -100,15 +100,16 @@ def test_objects_that_are_not_plain_data_are_rejected(mode):
                 return True
         def odd(k):
             return [Foo(), np.matrix([[1.0]]), np.array(["a"]), np.array([1], dtype=object),
-                    {1: 2}, [[[[[[[[[[1]]]]]]]]]], {1, 2}][k]
-        """, cases=[(k,) for k in range(7)])
+                    {1: 2}, [[[[[[[[[[1]]]]]]]]]], {1, 2}, 10 ** 5000][k]
+        """, cases=[(k,) for k in range(8)])
     runs = run(mode, odd)["odd"]
-    assert kinds(runs) == [K.REJECTED] * 7
+    assert kinds(runs) == [K.REJECTED] * 8
     messages = [o.message for o in runs.outcomes]
     assert messages[0] == "returned a Foo, not plain numbers"
     assert messages[1] == "returned a matrix, not plain numbers"
     assert "dtype <U1" in messages[2] and "dtype object" in messages[3]
     assert "keys" in messages[4] and "deep" in messages[5] and "a set" in messages[6]
+    assert "bits" in messages[7]
 
 
 # ------------------------------------------------------------------------------------------
