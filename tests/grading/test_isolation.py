@@ -331,6 +331,8 @@ def test_no_network_even_from_c(mode):
         def net(port):
             libc = ctypes.CDLL(None, use_errno=True)
             fd = libc.socket(socket.AF_INET, socket.SOCK_STREAM, 0)
+            timeout = struct.pack("ll", 1, 0)   # a SYN into a downed loopback waits: 1 s
+            libc.setsockopt(fd, socket.SOL_SOCKET, socket.SO_SNDTIMEO, timeout, len(timeout))
             addr = struct.pack("=HH4s8x", socket.AF_INET, socket.htons(port),
                                socket.inet_aton("127.0.0.1"))
             rc = libc.connect(fd, ctypes.c_char_p(addr), len(addr))
@@ -342,17 +344,27 @@ def test_no_network_even_from_c(mode):
                 py = type(exc).__name__
             with open("/proc/net/dev") as f:
                 interfaces = sorted(line.split(":")[0].strip() for line in f.readlines()[2:])
-            return raw, py, interfaces
+            try:   # even its own loopback is down
+                own = socket.socket()
+                own.bind(("127.0.0.1", 0))
+                own.listen(1)
+                socket.create_connection(own.getsockname(), timeout=1).close()
+                loop = "connected"
+            except OSError as exc:
+                loop = type(exc).__name__
+            return raw, py, interfaces, loop
         """, cases=[(port,)])
     try:
-        out = run(mode, net)["net"].outcomes[0]
+        out = run(mode, net, limits=Limits(case_timeout=10.0))["net"].outcomes[0]
         with pytest.raises(socket.timeout):
             server.accept()
     finally:
         server.close()
-    (rc, err), py, interfaces = out.value
+    (rc, err), py, interfaces, loop = out.value
     assert rc == -1 and err != 0 and py != "connected"
     assert interfaces == ["lo"]
+    if bwrap.privileged():
+        assert loop != "connected"
 
 
 # ------------------------------------------------------------------------------------------
