@@ -404,6 +404,24 @@ def test_references_absent_tables_present(mode):
     assert kinds(runs["imp"]) == [K.RETURNED]
 
 
+def test_every_source_notebooks_setup_cell_runs_in_the_sandbox(mode):
+    import nbformat
+
+    checked = 0
+    for path in sorted((REPO / "notebooks").glob("q*.ipynb")):
+        cells = nbformat.read(path, as_version=4).cells
+        setup = next((c.source for c in cells if c.cell_type == "code" and str(
+            c.metadata.get("nbgrader", {}).get("grade_id", "")).startswith("setup")), None)
+        if setup is None:
+            continue
+        runs = run(mode, fn("probe_np", "def probe_np():\n    return float(np.pi)\n"),
+                   setup=setup, job_id=path.stem)
+        assert runs["probe_np"].load_notes == [], (path.name, runs["probe_np"].load_notes)
+        assert runs["probe_np"].outcomes[0].value == pytest.approx(np.pi)
+        checked += 1
+    assert checked >= 1
+
+
 def test_callers_frames_hold_no_expected_value(mode):
     spy = fn("spy", """
         import sys
