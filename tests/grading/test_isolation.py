@@ -632,6 +632,37 @@ def test_probe_says_what_to_install(monkeypatch):
         bwrap.probe.cache_clear()
 
 
+NON_ROOT = """
+import sys
+sys.path[:0] = [{repo!r}, {site!r}]
+from autograder.isolation import CaseInput, Limits, NameJob, NotebookJob, probe, run_notebook
+src = "import os\\ndef u(x):\\n    return os.getuid(), os.getppid(), x * 2\\n"
+job = NotebookJob("n", "import numpy as np\\n", [NameJob("u", "function", [("a", src)],
+                                                           [CaseInput((3,), {{}})])])
+print(repr(run_notebook(job, Limits(), probe())["u"].outcomes[0].value))
+"""
+
+
+def test_without_root_user_namespaces_isolate(mode):
+    """As an ordinary user (``nobody``), with the system's Python of the same version."""
+    system_python = Path("/usr/bin/python3")
+    site = Path(np.__file__).resolve().parents[1]
+    if not bwrap.privileged() or not system_python.exists():
+        pytest.skip("needs root (to become nobody) and /usr/bin/python3")
+    version = subprocess.run([system_python, "-c", "import sys; print(sys.version_info[:2])"],
+                             capture_output=True, text=True).stdout.strip()
+    if version != str(tuple(sys.version_info[:2])):
+        pytest.skip(f"/usr/bin/python3 is {version}, NumPy here is for {sys.version_info[:2]}")
+    done = subprocess.run(
+        ["/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups",
+         system_python, "-c", NON_ROOT.format(repo=str(REPO), site=str(site))],
+        capture_output=True, text=True, timeout=120, env={"HOME": "/tmp", "PATH": "/usr/bin"})
+    if "Permission denied" in done.stderr:
+        pytest.skip("the repository or NumPy is not readable by nobody")
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "(1000, 1, 6)"   # its parent is PID 1: its own namespace
+
+
 def test_unsafe_mode_runs_the_same_child(tmp_path):
     assert "WITHOUT" in bwrap.UNSAFE_WARNING
     job = fn("double", "def double(x):\n    return 2 * x\n", cases=[(np.arange(3),)])
