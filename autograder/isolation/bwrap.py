@@ -176,6 +176,6 @@ def child_env(home: str) -> dict[str, str]:
     return env
 
 
-def have_shell() -> str:
+def posix_shell() -> str:
     """The POSIX shell used to put the sandbox into its cgroup before it starts."""
     return shutil.which("sh", path="/usr/bin:/bin") or "/bin/sh"
