@@ -22,6 +22,9 @@ SETPRIV = "/usr/bin/setpriv"
 SITE = "/sandbox/site"          #: where NumPy and the allow-listed tables appear inside
 CHILD = "/sandbox/child.py"     #: where the child program appears inside
 JOB = "/job"                    #: where the job file appears inside
+#: Run first inside the sandbox (as root, before the uid changes): the private network
+#: namespace's loopback goes down too, so the sandbox has no working interface at all.
+LOOPBACK_DOWN = 'if [ -x /usr/bin/ip ]; then /usr/bin/ip link set lo down || exit 125; fi; exec "$@"'
 INSTALL_HINT = "install it with `apt-get install bubblewrap` (or `make sandbox-deps`)"
 
 #: What an instructor loses with ``--unsafe-no-isolation`` (printed by the caller).
@@ -145,9 +148,10 @@ def bwrap_command(job_file: str, allowlist_dir: str, child_file: str, channel_fd
              "--ro-bind", job_file, JOB, "--ro-bind", child_file, CHILD,
              "--proc", "/proc", "--dev", "/dev",
              "--size", str(int(scratch_mb) * 2**20), "--perms", "1777", "--tmpfs", "/tmp", "--chdir", "/tmp"]
-    if uid is not None:
+    if uid is not None:   # as root: loopback down, then a uid of its own and no capability
         argv += ["--cap-drop", "ALL", "--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID",
-                 "--cap-add", "CAP_SETPCAP", "--as-pid-1", "--",
+                 "--cap-add", "CAP_SETPCAP", "--cap-add", "CAP_NET_ADMIN", "--as-pid-1", "--",
+                 "/bin/sh", "-c", LOOPBACK_DOWN, "sh",
                  SETPRIV, f"--reuid={uid}", f"--regid={uid}", "--clear-groups",
                  "--inh-caps=-all", "--bounding-set=-all", "--no-new-privs"]
     else:
@@ -172,6 +176,6 @@ def child_env(home: str) -> dict[str, str]:
     return env
 
 
-def have_shell() -> str:
+def posix_shell() -> str:
     """The POSIX shell used to put the sandbox into its cgroup before it starts."""
     return shutil.which("sh", path="/usr/bin:/bin") or "/bin/sh"

@@ -37,6 +37,7 @@ import time
 
 FRAME = struct.Struct(">I")        #: the length prefix of every record
 MAX_DEPTH = 8                      #: containers nested deeper are rejected
+MAX_INT_BITS = 4096                #: larger ints are rejected (JSON would need > 1233 digits)
 SCALAR_COST = 1                    #: budget bytes charged per scalar / container element
 RECORD_OVERHEAD = 64 * 1024        #: bytes a record may take beyond its value and its prints
 GRACE = 1.0                        #: seconds the supervisor waits beyond a worker's own alarm
@@ -91,6 +92,8 @@ def encode_value(v, budget: Budget, depth: int = 0):
     if depth > MAX_DEPTH:
         raise NotPlain(f"a structure nested more than {MAX_DEPTH} deep")
     t = type(v)
+    if t is int and v.bit_length() > MAX_INT_BITS:
+        raise NotPlain(f"an int of more than {MAX_INT_BITS} bits")
     if v is None or t is bool or t is int or t is float:
         budget.spend(SCALAR_COST)
         return v
@@ -237,7 +240,9 @@ class FrameReader:
             return "garbage", None
         return ("record", (rec, raw)) if type(rec) is dict else ("garbage", None)
 
-    def next(self, deadline: float):
+    def next(self, deadline: float, alive=None):
+        """The next event; ``alive()`` (if given) is asked whenever the pipe is quiet, and a
+        False answer is an ``"eof"`` (a writer may die while a child of it holds the pipe)."""
         import select
 
         while True:
@@ -248,7 +253,9 @@ class FrameReader:
             left = deadline - time.monotonic()
             if left <= 0:
                 return "timeout", None
-            if not select.select([self.fd], [], [], min(left, 1.0))[0]:
+            if not select.select([self.fd], [], [], min(left, 0.1 if alive else 1.0))[0]:
+                if alive is not None and not alive():
+                    return "eof", None
                 continue
             want = FRAME.size + self.frame_cap - len(self.buf)
             if self.total_cap is not None:
@@ -316,7 +323,7 @@ def _describe_status(status: int) -> str:
             name = signal.Signals(sig).name
         except ValueError:
             name = f"signal {sig}"
-        hint = {"SIGKILL": " (probably out of memory)", "SIGSEGV": " (a segmentation fault)",
+        hint = {"SIGKILL": " (out of memory, or killed)", "SIGSEGV": " (a segmentation fault)",
                 "SIGXCPU": " (out of CPU time)", "SIGABRT": " (aborted)"}.get(name, "")
         return f"the process was killed by {name}{hint}"
     return f"the process exited with code {os.WEXITSTATUS(status)}"
@@ -508,7 +515,11 @@ def _case_record(nj: dict, i: int, ns: dict, limits: dict, reference: str, captu
         rec = {"kind": "not-run", "message": f"{nj['name']!r} is not defined after its cells"}
     rec.update(t="case", name=nj["name"], i=i, seconds=time.monotonic() - t0,
                printed=capture.take())
-    data = frame(rec)
+    try:
+        data = frame(rec)
+    except (ValueError, TypeError, RecursionError):
+        rec.update(kind="rejected", value=None, message="the result could not be encoded")
+        data = frame(rec)
     if len(data) > record_cap(case["cap"], limits["output_bytes"]):
         rec.update(kind="rejected", value=None, printed=rec["printed"][:1000],
                    message=f"result too large (more than {case['cap']} bytes)")
@@ -611,6 +622,7 @@ class NameSupervisor:
         self.timeouts = 0          # timeouts in a row
         self.label = "?"           # the cell running now
         self.pid = 0
+        self.status = None         # the worker's wait status, once collected
 
     def emit(self, rec: dict) -> None:
         rec.setdefault("name", self.nj["name"])
@@ -651,12 +663,15 @@ class NameSupervisor:
             os.close(wfd)
             self.settle_rest("crashed", f"could not start a process ({exc.strerror})")
             return False
-        if pid == 0:
-            os.close(rfd)
-            os.close(self.channel)
-            worker_main(self.nj, self.ns, self.next, self.limits, wfd)
+        if pid == 0:   # the worker: never returns into the supervisor's code
+            try:
+                os.close(rfd)
+                os.close(self.channel)
+                worker_main(self.nj, self.ns, self.next, self.limits, wfd)
+            finally:
+                os._exit(70)
         os.close(wfd)
-        self.pid = pid
+        self.pid, self.status = pid, None
         try:
             return self.watch(FrameReader(rfd, self.frame_cap()))
         finally:
@@ -670,7 +685,7 @@ class NameSupervisor:
         loading, started = True, time.monotonic()
         deadline = started + float(self.limits["load_timeout"]) + GRACE
         while True:
-            event, payload = reader.next(deadline)
+            event, payload = reader.next(deadline, self.worker_alive)
             if event != "record":
                 return self.failed(event, loading, started)
             rec, raw = payload
@@ -703,18 +718,24 @@ class NameSupervisor:
             else:
                 return self.failed("garbage", loading, started)
 
-    def exit_status(self, wait: float) -> str:
-        end = time.monotonic() + wait
-        while True:
+    def worker_alive(self) -> bool:
+        """False once the worker has exited (its wait status is kept)."""
+        if self.status is None:
             try:
                 pid, status = os.waitpid(self.pid, os.WNOHANG)
             except ChildProcessError:
-                return "the process ended"
+                pid, status = self.pid, 0
             if pid:
-                return _describe_status(status)
+                self.status = status
+        return self.status is None
+
+    def exit_status(self, wait: float) -> str:
+        end = time.monotonic() + wait
+        while self.worker_alive():
             if time.monotonic() >= end:
                 return "the process stopped responding"
             time.sleep(0.005)
+        return _describe_status(self.status)
 
     def failed(self, event: str, loading: bool, started: float) -> bool:
         """The worker died, hung or sent something wrong: settle what it left, decide."""
@@ -804,8 +825,9 @@ def main(argv: list) -> None:
         job = json.loads(f.read())
     limits = job["limits"]
     _set_rlimits(limits, float(limits["budget_seconds"]))
-    if opts["--site"]:
-        sys.path.append(opts["--site"])
+    # the interpreter's own standard library, then the site dir (NumPy, the allowed tables)
+    stdlib = [p for p in sys.path if p.startswith(sys.base_prefix + os.sep)]
+    sys.path[:] = stdlib + ([opts["--site"]] if opts["--site"] else [])
     import builtins
 
     import numpy  # noqa: F401 - imported once here, inherited by every worker

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import fcntl
 import os
+import random
 import signal
 import time
 
@@ -46,9 +47,12 @@ def _lock_dir() -> str:
 
 
 def allocate_uid() -> UidLease:
-    """Lock and return the first free uid of the range (``RuntimeError`` if all are taken)."""
+    """Lock and return a free uid of the range (``RuntimeError`` if all are taken). The search
+    starts at a random place, so a uid just released is rarely handed out again at once."""
     directory = _lock_dir()
-    for uid in range(UID_BASE, UID_BASE + UID_COUNT):
+    start = random.randrange(UID_COUNT)
+    for k in range(UID_COUNT):
+        uid = UID_BASE + (start + k) % UID_COUNT
         fd = os.open(os.path.join(directory, f"{uid}.lock"),
                      os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o600)
         try:

@@ -242,7 +242,7 @@ def _stop(proc: subprocess.Popen, ending: str) -> None:
 
 def _spawn(argv: list[str], cwd: str, env: dict, wfd: int, errfile, cgroup) -> subprocess.Popen:
     if cgroup is not None and cgroup.procs_files():
-        argv = [bwrap.have_shell(), "-c", JOIN_CGROUP, "sh", *cgroup.procs_files(), "--", *argv]
+        argv = [bwrap.posix_shell(), "-c", JOIN_CGROUP, "sh", *cgroup.procs_files(), "--", *argv]
     return subprocess.Popen(argv, cwd=cwd, env=env, stdin=subprocess.DEVNULL,
                             stdout=subprocess.DEVNULL, stderr=errfile, pass_fds=(wfd,),
                             start_new_session=True)

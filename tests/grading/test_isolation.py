@@ -51,10 +51,24 @@ def kinds(name_run):
     return [o.kind for o in name_run.outcomes]
 
 
-def sandbox_uids_alive() -> list[int]:
-    """Pids of live processes with a sandbox uid (the range identity hands out)."""
-    return [pid for uid in range(identity.UID_BASE, identity.UID_BASE + 16)
-            for pid in identity.uid_processes(uid)]
+def processes_left(uid: int) -> list[int]:
+    """Live processes of a finished job's ``uid``, checked while holding its lock (so another
+    grading run on this machine cannot be using that uid meanwhile)."""
+    if not bwrap.privileged():
+        return []
+    import fcntl
+
+    fd = os.open(os.path.join(identity.LOCK_DIR, f"{uid}.lock"), os.O_RDWR)
+    try:
+        for _ in range(600):
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                return identity.uid_processes(uid)
+            except BlockingIOError:   # reused already by another job: wait for its end
+                time.sleep(0.1)
+        raise AssertionError(f"uid {uid} stayed busy")
+    finally:
+        os.close(fd)
 
 
 # ------------------------------------------------------------------------------------------
@@ -100,15 +114,16 @@ def test_objects_that_are_not_plain_data_are_rejected(mode):
                 return True
         def odd(k):
             return [Foo(), np.matrix([[1.0]]), np.array(["a"]), np.array([1], dtype=object),
-                    {1: 2}, [[[[[[[[[[1]]]]]]]]]], {1, 2}][k]
-        """, cases=[(k,) for k in range(7)])
+                    {1: 2}, [[[[[[[[[[1]]]]]]]]]], {1, 2}, 10 ** 5000][k]
+        """, cases=[(k,) for k in range(8)])
     runs = run(mode, odd)["odd"]
-    assert kinds(runs) == [K.REJECTED] * 7
+    assert kinds(runs) == [K.REJECTED] * 8
     messages = [o.message for o in runs.outcomes]
     assert messages[0] == "returned a Foo, not plain numbers"
     assert messages[1] == "returned a matrix, not plain numbers"
     assert "dtype <U1" in messages[2] and "dtype object" in messages[3]
     assert "keys" in messages[4] and "deep" in messages[5] and "a set" in messages[6]
+    assert "bits" in messages[7]
 
 
 # ------------------------------------------------------------------------------------------
@@ -256,14 +271,68 @@ def test_processes_cannot_outlive_the_job_or_reach_another_job(mode):
     runs = run(mode, evil, job_id="evil")
     thread.join()
 
-    # the grandchild kills the worker but keeps its pipe open: crashed or stopped by the clock
-    assert kinds(runs["evil"])[0] in (K.CRASHED, K.TIMEOUT, K.RETURNED)
+    # the grandchild kills the worker (and holds its pipe open): the supervisor sees it die
+    assert kinds(runs["evil"])[0] is K.CRASHED
+    assert "SIGKILL" in runs["evil"].outcomes[0].message
     assert kinds(runs["evil"])[1:] == [K.RETURNED, K.RETURNED]
     evil_uid = runs["evil"].outcomes[1].value[1]
     assert kinds(results["calm"]) == [K.RETURNED] * 8
     assert [o.value[0] for o in results["calm"].outcomes] == [2.0 * k for k in range(8)]
     assert results["calm"].outcomes[0].value[1] != evil_uid
-    assert identity.uid_processes(evil_uid) == [] and sandbox_uids_alive() == []
+    assert processes_left(evil_uid) == []
+
+
+def test_fork_bomb_is_contained_and_cleared(mode):
+    bomb = fn("bomb", """
+        import os
+        def bomb(k):
+            if k == 0:
+                while True:
+                    try:
+                        os.fork()
+                    except OSError:
+                        pass
+            return os.getuid()
+        """, cases=[(0,), (1,)])
+    t0 = time.monotonic()
+    runs = run(mode, bomb, limits=Limits(case_timeout=2.0, pids=32))["bomb"]
+    assert kinds(runs) == [K.TIMEOUT, K.RETURNED]
+    assert time.monotonic() - t0 < 30
+    assert processes_left(runs.outcomes[1].value) == []
+
+
+def test_the_job_budget_kills_the_whole_sandbox(mode, monkeypatch):
+    from autograder.isolation import runner
+
+    monkeypatch.setattr(runner, "job_budget", lambda job, limits: 6.0)
+    sleeper = fn("sleeper", """
+        import os, time
+        def sleeper(k):
+            if os.fork() == 0:
+                os.setsid()
+                time.sleep(60)
+            time.sleep(60)
+        """, cases=[(0,), (1,)])
+    who = fn("who", "import os\ndef who():\n    return os.getuid()\n")
+    t0 = time.monotonic()
+    runs = run(mode, who, sleeper, limits=Limits(case_timeout=120.0))
+    assert time.monotonic() - t0 < 20
+    assert kinds(runs["sleeper"]) == [K.NOT_RUN, K.NOT_RUN]
+    assert runs["sleeper"].outcomes[0].message == "not run: the job's time ran out"
+    assert processes_left(runs["who"].outcomes[0].value) == []
+
+
+def test_two_grading_processes_get_distinct_uids(mode):
+    script = textwrap.dedent("""
+        from autograder.isolation import CaseInput, Limits, NameJob, NotebookJob, probe, run_notebook
+        src = "import os, time\\ndef u():\\n    time.sleep(1.5)\\n    return os.getuid()\\n"
+        job = NotebookJob("p", "", [NameJob("u", "function", [("a", src)], [CaseInput((), {})])])
+        print(run_notebook(job, Limits(), probe())["u"].outcomes[0].value)
+        """)
+    procs = [subprocess.Popen([sys.executable, "-c", script], cwd=REPO, text=True,
+                              stdout=subprocess.PIPE) for _ in range(2)]
+    uids = [int(p.communicate(timeout=120)[0].strip()) for p in procs]
+    assert len(set(uids)) == 2 and 0 not in uids
 
 
 def test_no_network_even_from_c(mode):
@@ -277,6 +346,8 @@ def test_no_network_even_from_c(mode):
         def net(port):
             libc = ctypes.CDLL(None, use_errno=True)
             fd = libc.socket(socket.AF_INET, socket.SOCK_STREAM, 0)
+            timeout = struct.pack("ll", 1, 0)   # a SYN into a downed loopback waits: 1 s
+            libc.setsockopt(fd, socket.SOL_SOCKET, socket.SO_SNDTIMEO, timeout, len(timeout))
             addr = struct.pack("=HH4s8x", socket.AF_INET, socket.htons(port),
                                socket.inet_aton("127.0.0.1"))
             rc = libc.connect(fd, ctypes.c_char_p(addr), len(addr))
@@ -288,17 +359,27 @@ def test_no_network_even_from_c(mode):
                 py = type(exc).__name__
             with open("/proc/net/dev") as f:
                 interfaces = sorted(line.split(":")[0].strip() for line in f.readlines()[2:])
-            return raw, py, interfaces
+            try:   # even its own loopback is down
+                own = socket.socket()
+                own.bind(("127.0.0.1", 0))
+                own.listen(1)
+                socket.create_connection(own.getsockname(), timeout=1).close()
+                loop = "connected"
+            except OSError as exc:
+                loop = type(exc).__name__
+            return raw, py, interfaces, loop
         """, cases=[(port,)])
     try:
-        out = run(mode, net)["net"].outcomes[0]
+        out = run(mode, net, limits=Limits(case_timeout=10.0))["net"].outcomes[0]
         with pytest.raises(socket.timeout):
             server.accept()
     finally:
         server.close()
-    (rc, err), py, interfaces = out.value
+    (rc, err), py, interfaces, loop = out.value
     assert rc == -1 and err != 0 and py != "connected"
     assert interfaces == ["lo"]
+    if bwrap.privileged():
+        assert loop != "connected"
 
 
 # ------------------------------------------------------------------------------------------
@@ -336,6 +417,24 @@ def test_references_absent_tables_present(mode):
         np.testing.assert_array_equal(got, want)
     assert "course_lib.clipping" in runs["imp"].load_notes[0]
     assert kinds(runs["imp"]) == [K.RETURNED]
+
+
+def test_every_source_notebooks_setup_cell_runs_in_the_sandbox(mode):
+    import nbformat
+
+    checked = 0
+    for path in sorted((REPO / "notebooks").glob("q*.ipynb")):
+        cells = nbformat.read(path, as_version=4).cells
+        setup = next((c.source for c in cells if c.cell_type == "code" and str(
+            c.metadata.get("nbgrader", {}).get("grade_id", "")).startswith("setup")), None)
+        if setup is None:
+            continue
+        runs = run(mode, fn("probe_np", "def probe_np():\n    return float(np.pi)\n"),
+                   setup=setup, job_id=path.stem)
+        assert runs["probe_np"].load_notes == [], (path.name, runs["probe_np"].load_notes)
+        assert runs["probe_np"].outcomes[0].value == pytest.approx(np.pi)
+        checked += 1
+    assert checked >= 1
 
 
 def test_callers_frames_hold_no_expected_value(mode):
@@ -459,10 +558,15 @@ def big(k):
             except OSError:
                 pass
         return blocked
+    if k == 3:   # switch off the worker's own size check: the supervisor still refuses it
+        import __main__
+        __main__.record_cap = lambda *args: 1 << 40
+        __main__.encode_value = lambda v, budget, depth=0: {"t": "list", "v": ["y" * 2**20] * 300}
+        return 0
     return k
 '''
 job = NotebookJob("rss", "import numpy as np\\n", [NameJob("big", "function", [("c", source)],
-                  [CaseInput((k,), {}, 1024) for k in range(4)])])
+                  [CaseInput((k,), {}, 1024) for k in range(5)])])
 runs = run_notebook(job, Limits(case_timeout=20.0), probe())
 out = [(o.kind.value, o.value if o.kind.value == "returned" else o.message)
        for o in runs["big"].outcomes]
@@ -477,7 +581,8 @@ def test_huge_results_and_forged_records_leave_the_grader_small(mode):
     report = json.loads(done.stdout.strip().splitlines()[-1])
     assert report["out"] == [["rejected", "result too large (more than 1024 bytes)"],
                              ["rejected", "result too large (more than 1024 bytes)"],
-                             ["rejected", "result too large"], ["returned", 3]]
+                             ["rejected", "result too large"],
+                             ["rejected", "result too large"], ["returned", 4]]
     assert report["maxrss_kb"] < 2**20
 
 
@@ -546,6 +651,37 @@ def test_probe_says_what_to_install(monkeypatch):
             bwrap.probe()
     finally:
         bwrap.probe.cache_clear()
+
+
+NON_ROOT = """
+import sys
+sys.path[:0] = [{repo!r}, {site!r}]
+from autograder.isolation import CaseInput, Limits, NameJob, NotebookJob, probe, run_notebook
+src = "import os\\ndef u(x):\\n    return os.getuid(), os.getppid(), x * 2\\n"
+job = NotebookJob("n", "import numpy as np\\n", [NameJob("u", "function", [("a", src)],
+                                                           [CaseInput((3,), {{}})])])
+print(repr(run_notebook(job, Limits(), probe())["u"].outcomes[0].value))
+"""
+
+
+def test_without_root_user_namespaces_isolate(mode):
+    """As an ordinary user (``nobody``), with the system's Python of the same version."""
+    system_python = Path("/usr/bin/python3")
+    site = Path(np.__file__).resolve().parents[1]
+    if not bwrap.privileged() or not system_python.exists():
+        pytest.skip("needs root (to become nobody) and /usr/bin/python3")
+    version = subprocess.run([system_python, "-c", "import sys; print(sys.version_info[:2])"],
+                             capture_output=True, text=True).stdout.strip()
+    if version != str(tuple(sys.version_info[:2])):
+        pytest.skip(f"/usr/bin/python3 is {version}, NumPy here is for {sys.version_info[:2]}")
+    done = subprocess.run(
+        ["/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups",
+         system_python, "-c", NON_ROOT.format(repo=str(REPO), site=str(site))],
+        capture_output=True, text=True, timeout=120, env={"HOME": "/tmp", "PATH": "/usr/bin"})
+    if "Permission denied" in done.stderr:
+        pytest.skip("the repository or NumPy is not readable by nobody")
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "(1000, 1, 6)"   # its parent is PID 1: its own namespace
 
 
 def test_unsafe_mode_runs_the_same_child(tmp_path):
