@@ -4,7 +4,7 @@ and grading the same folder again gives the same scores.
 Each generated student hands in one or two notebooks; in each, every *independent* graded name
 (one no other solution calls) is, at random, the model answer, a wrong answer, the release stub
 (``raise NotImplementedError()``) or a deleted cell, so every expected score is known exactly by
-construction: full points, or 0 with status failed / error / missing.
+construction: full points, or 0 with status failed / unanswered (the stub) / missing.
 """
 
 from __future__ import annotations
@@ -65,7 +65,7 @@ def _expected(src, choice: dict[str, str]) -> dict[str, tuple[float | None, str]
     exp = {}
     for name, tid, pts in src.graded:
         kind = choice.get(name, "model")
-        exp[tid] = {"model": (pts, "ok"), "wrong": (0.0, "failed"), "stub": (0.0, "error"),
+        exp[tid] = {"model": (pts, "ok"), "wrong": (0.0, "failed"), "stub": (0.0, "unanswered"),
                     "deleted": (0.0, "missing")}[kind]
     exp.update({gid: (None, "manual") for gid, _ in src.manual})
     return exp
