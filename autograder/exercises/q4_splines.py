@@ -71,7 +71,9 @@ def _end_rows_cases(rng):
     yield Case(args=(rng.integers(-6, 7, size=(4, 4)).astype(float),),
                label="random matrix of small integers")
     yield Case(args=(np.ones((3, 4)),), label="M of shape (3, 4)", raises=ValueError)
-    yield Case(args=(np.ones(16),), label="M of shape (16,)", raises=ValueError)
+    yield Case(args=(np.ones((4, 3)),), label="M of shape (4, 3)", raises=ValueError)
+    yield Case(args=(np.stack([_CR, _BS]),), label="two matrices, shape (2, 4, 4)",
+               raises=ValueError)
 
 
 def _spline_eval_cases(rng):

@@ -491,6 +491,15 @@ def test_registry_catches_common_mistakes():
                          S.phantom_point(P[-2], P[-1], end_rule)])
         return S.sample_curve(ext, kind, n)
     assert _fails("sample_curve", unmirrored)
+    # end_rows: rows multiplied into the transposed matrix; a table of the two bases' answers
+    assert _fails("end_rows", lambda M: np.stack([S.parameter_row(1.0, k) @ np.asarray(M).T
+                                                  for k in range(3)]))
+    def two_bases_only(M):
+        return S.end_rows(CR if np.allclose(M, CR) else BS)
+    assert _fails("end_rows", two_bases_only)
+    # end_rows without its ValueError for a matrix that is not 4 x 4
+    assert _fails("end_rows", lambda M: np.stack([S.parameter_row(1.0, k) @ np.asarray(M)
+                                                  for k in range(3)]))
     # accepting any rule name silently
     assert _fails("phantom_point", lambda b, c, rule: 2 * np.asarray(c, float) - b
                   if rule == "d=2c-b" else np.asarray(b if rule == "d=b" else c, float))
