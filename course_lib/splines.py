@@ -111,7 +111,7 @@ def bspline_basis() -> np.ndarray:
 
     Examples
     --------
-    >>> 6 * ([1, 1, 1, 1] @ bspline_basis())
+    >>> np.round(6 * ([1, 1, 1, 1] @ bspline_basis()), 12)   # up to round-off
     array([0., 1., 4., 1.])
     """
     return _BSPLINE.copy()
