@@ -389,7 +389,7 @@ EXERCISES = [
              description="Q3(d) the closed and consistently ordered condition"),
     _choice("q3a_vertex_position", "b", "Q3(a) where on the edge the vertex goes"),
     _choice("q3b_cases", "c", "Q3(b) how many cases, how many with triangles"),
-    _choice("q3c_ambiguous", "a", "Q3(c) which cases are ambiguous"),
+    _choice("q3c_ambiguous", "d", "Q3(c) which cases are ambiguous"),
     _choice("q3c_hole", "a", "Q3(c) what the ambiguity is and what goes wrong"),
-    _choice("q3d_conditions", "a", "Q3(d) conditions for the volume to be meaningful"),
+    _choice("q3d_conditions", "c", "Q3(d) conditions for the volume to be meaningful"),
 ]
