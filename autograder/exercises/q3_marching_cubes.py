@@ -9,6 +9,12 @@ A marching-cubes mesh is only defined up to the order of its vertices, the order
 and the starting vertex of each face (and, since the contract does not fix it, the direction in
 which all faces are wound), so :func:`same_mesh` compares the set of vertices, the numbers of
 faces, closedness, and the enclosed volume and area.
+
+``symmetry_orbit`` (Q3(b)) asks for the class of one case, written out and sorted, on random
+cases: no table of class counts answers it. ``alternative_triangulation`` (Q3(c)) has many right
+answers (the order of the triangles, the start of each, the choice of fan inside each loop), so
+:func:`same_joined_patch` checks the properties the notebook states and then that the triangles
+close up with neighbours that join the inside corners on every ambiguous face.
 """
 
 from __future__ import annotations

@@ -653,6 +653,14 @@ def test_joined_patch_rule_accepts_every_valid_answer_and_names_the_fault():
         assert same_joined_patch(expected, expected[:, ::-1]) is not None
         assert same_joined_patch(expected, expected[1:]) is not None
         assert same_joined_patch(expected, expected.tolist()) is not None
+        uncrossed = [e for e in range(12) if not (int(mc.EDGE_TABLE[index]) >> e) & 1]
+        if uncrossed:                                   # case 13 crosses all twelve edges
+            wrong_edge = expected.copy()
+            wrong_edge[0, 0] = uncrossed[0]
+            assert "does not cross" in same_joined_patch(expected, wrong_edge)
+        repeated = expected.copy()
+        repeated[0, 1] = repeated[0, 0]
+        assert "repeats" in same_joined_patch(expected, repeated)
 
 
 def test_sphere_volume_error_quarters_when_the_spacing_halves():
@@ -668,3 +676,12 @@ def test_sphere_volume_error_quarters_when_the_spacing_halves():
     ratios = np.array(errors[:-1]) / np.array(errors[1:])
     assert np.all(np.array(errors) > 0)                  # the inscribed mesh underestimates
     assert np.all((ratios > 3.6) & (ratios < 4.4)), ratios
+
+
+def test_joined_patch_rule_rejects_a_triangle_flat_in_a_face():
+    from autograder.exercises.q3_marching_cubes import same_joined_patch
+
+    expected = mc.alternative_triangulation(5)          # corners 0 and 2: bottom face z = 0
+    flat = expected.copy()
+    flat[0] = (0, 1, 2)                                  # three crossings of the bottom face
+    assert "flat" in same_joined_patch(expected, flat)
