@@ -19,6 +19,8 @@ close up with neighbours that join the inside corners on every ambiguous face.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from course_lib import marching_cubes as mc
@@ -115,9 +117,12 @@ def _as_edge_triangles(received) -> np.ndarray | str:
 #: face lies flat in that face.
 _FACES_OF_EDGE = [frozenset(f for f, quad in enumerate(mc.FACES) if a in quad and b in quad)
                   for a, b in mc.EDGES]
-#: The reference answer of each face-ambiguous case, to find the case back from it.
-_CASE_OF_ANSWER = {mc.alternative_triangulation(i).tobytes(): i
-                   for i in range(256) if mc.ambiguous_faces(i)}
+@functools.cache
+def _case_of_answer() -> dict[bytes, int]:
+    """The reference answer of each face-ambiguous case, to find the case back from it (built
+    on first use, in the grader's process)."""
+    return {mc.alternative_triangulation(i).tobytes(): i
+            for i in range(256) if mc.ambiguous_faces(i)}
 
 
 def same_joined_patch(expected, received) -> str | None:
@@ -129,7 +134,7 @@ def same_joined_patch(expected, received) -> str | None:
     it must close up, consistently wound, with neighbours that join the inside corners on every
     ambiguous face (:func:`course_lib.marching_cubes.probe_triangulation`).
     """
-    index = _CASE_OF_ANSWER[np.asarray(expected, dtype=np.int64).tobytes()]
+    index = _case_of_answer()[np.asarray(expected, dtype=np.int64).tobytes()]
     tris = _as_edge_triangles(received)
     if isinstance(tris, str):
         return tris
