@@ -176,17 +176,17 @@ EXERCISES = [
     _function("halfway", shading.halfway, _halfway_cases, "Q5(c) the half-way vector H"),
     _function("blinn_phong", shading.blinn_phong, _model_cases,
               "Q5(c) the Blinn-Phong model, (N.H)^n"),
-    # Q5(a): what the specular exponent does
+    # Q5(a), Item Q5.1: what the specular exponent does
     Exercise(name="specular_exponent_effect", notebook=NB, kind="choice", answer="b",
-             options=_choices, description="Q5(a) the role of n"),
-    # Q5(c): when N.H saves work
+             options=_choices, description="Q5(a) Item Q5.1: the role of n"),
+    # Q5(c), Item Q5.2: when N.H saves work
     Exercise(name="halfway_saving_condition", notebook=NB, kind="choice", answer="c",
-             options=_choices, description="Q5(c) when the half-way vector is cheaper"),
-    # Q5(d): the cause of colour aliasing
-    Exercise(name="colour_aliasing_cause", notebook=NB, kind="choice", answer="d",
-             options=_choices, description="Q5(d) why three samples alias"),
-    # Q5(d): what reduces it (all that apply)
+             options=_choices, description="Q5(c) Item Q5.2: when the half-way vector is cheaper"),
+    # Q5(d), Item Q5.3: the cause of colour aliasing
+    Exercise(name="colour_aliasing_cause", notebook=NB, kind="choice", answer="c",
+             options=_choices, description="Q5(d) Item Q5.3: why three samples alias"),
+    # Q5(d), Item Q5.4: what reduces it (all that apply)
     Exercise(name="colour_aliasing_remedies", notebook=NB, kind="choice",
              answer=frozenset({"a", "c"}), options=_choices,
-             description="Q5(d) remedies for colour aliasing (all that apply)"),
+             description="Q5(d) Item Q5.4: remedies for colour aliasing (all that apply)"),
 ]
