@@ -77,6 +77,21 @@ def test_exam_triangles_come_from_the_perspective_matrix():
     np.testing.assert_allclose(C.EXAM_Q6["B"][:, 3], C.EXAM_Q6["B_camera"][:, 2])
 
 
+def test_exam_w_grows_with_depth():
+    """The notebook says w grows with depth: vertices at the same z_s share w, deeper ones have
+    larger w (checked on the divided coordinates of all six vertices)."""
+    P = np.vstack([C.EXAM_Q6["A"], C.EXAM_Q6["B"]])
+    z_s, w = P[:, 2] / P[:, 3], P[:, 3]
+    order = np.argsort(z_s, kind="stable")
+    assert np.all(np.diff(w[order]) >= 0)
+    for i in range(len(P)):
+        for j in range(len(P)):
+            if np.isclose(z_s[i], z_s[j]):
+                assert np.isclose(w[i], w[j])
+            elif z_s[i] < z_s[j]:
+                assert w[i] < w[j]
+
+
 def test_perspective_matrix_maps_the_frustum_onto_the_view_volume():
     """Near plane -> z_s = 0, far plane -> z_s = 1, window edges -> x_s, y_s = +-1, w = depth,
     and z_s = far (1 - near / z_c) / (far - near) (the analytic form), for random cameras."""
