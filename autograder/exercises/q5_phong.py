@@ -73,10 +73,13 @@ def _normalize_cases(rng):
 
 def _reflect_cases(rng):
     Lu = _L / np.linalg.norm(_L)
-    yield Case(args=(Lu, _N), label="exam Q5(b): unit L and N (R.V = (1 + 1/sqrt3)/2)",
-               visible=True)
     yield Case(args=(np.array([1.0, 1.0, 0.0]) / np.sqrt(2), np.array([0.0, 1.0, 0.0])),
                label="45 degrees onto the floor comes off at 45 degrees", visible=True)
+    yield Case(args=(np.array([1.0, 2.0, 2.0]) / 3.0, np.array([0.0, 0.0, 5.0])),
+               label="unit L = (1, 2, 2)/3 about N = (0, 0, 5): N must be normalised",
+               visible=True)
+    # hidden: the exam's vectors (Q5(b) asks for R.V by hand, so no visible check gives it away)
+    yield Case(args=(Lu, _N), label="exam Q5(b): unit L and N")
     for _ in range(3):
         L, N = _random_vectors(rng, scale=(1, 1)), _random_vectors(rng, scale=(1, 1))
         yield Case(args=(L, N), label="random unit L and N")
