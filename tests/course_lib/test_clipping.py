@@ -73,8 +73,8 @@ def test_exam_triangles_come_from_the_perspective_matrix():
     np.testing.assert_allclose(C.EXAM_Q6["A"], A_H, atol=1e-12)
     np.testing.assert_allclose(C.EXAM_Q6["B"], B_H, atol=1e-12)
     # w is the depth z_c of each camera-space vertex, so it grows with distance
-    np.testing.assert_allclose(C.EXAM_Q6["A"][:, 3], C.EXAM_Q6["A_camera"][:, 2])
-    np.testing.assert_allclose(C.EXAM_Q6["B"][:, 3], C.EXAM_Q6["B_camera"][:, 2])
+    np.testing.assert_allclose(C.EXAM_Q6["A"][:, 3], C.EXAM_Q6["A_camera"][:, 2], atol=1e-12)
+    np.testing.assert_allclose(C.EXAM_Q6["B"][:, 3], C.EXAM_Q6["B_camera"][:, 2], atol=1e-12)
 
 
 def test_exam_w_grows_with_depth():
@@ -104,10 +104,10 @@ def test_perspective_matrix_maps_the_frustum_onto_the_view_volume():
         z = rng.uniform(0.5 * near, 2.0 * far, 200)
         x, y = rng.uniform(-1.5, 1.5, (2, 200)) * t * z
         P = np.stack([x, y, z, np.ones_like(z)], axis=1) @ M.T
-        np.testing.assert_allclose(P[:, 3], z)
+        np.testing.assert_allclose(P[:, 3], z, atol=1e-12)
         s = P[:, :3] / P[:, 3:]
-        np.testing.assert_allclose(s[:, 2], far * (1 - near / z) / (far - near), rtol=1e-12)
-        np.testing.assert_allclose(s[:, :2], np.stack([x, y], axis=1) / (t * z[:, None]))
+        np.testing.assert_allclose(s[:, 2], far * (1 - near / z) / (far - near), rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(s[:, :2], np.stack([x, y], axis=1) / (t * z[:, None]), atol=1e-12)
         inside = (np.abs(x) <= t * z) & (np.abs(y) <= t * z) & (near <= z) & (z <= far)
         margin = np.minimum.reduce([t * z - np.abs(x), t * z - np.abs(y), z - near, far - z])
         clear = np.abs(margin) > 1e-9 * far

@@ -283,7 +283,7 @@ def test_end_rows_of_bezier_are_its_textbook_end_conditions():
 
 
 def test_end_rows_of_identity_are_the_parameter_rows():
-    np.testing.assert_allclose(S.end_rows(np.eye(4)), [[1, 1, 1, 1], [3, 2, 1, 0], [6, 2, 0, 0]])
+    np.testing.assert_allclose(S.end_rows(np.eye(4)), [[1, 1, 1, 1], [3, 2, 1, 0], [6, 2, 0, 0]], atol=1e-12)
 
 
 @settings(max_examples=30, deadline=None)
