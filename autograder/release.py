@@ -4,7 +4,9 @@ The student notebooks come out of nbgrader's own ``generate_assignment`` (run in
 course root, ``course/`` at the repository root unless ``--course-root`` says otherwise, whose
 gradebook then holds the assignment for grading). They are copied to ``--out/tripos2006/`` only
 after a leak check: no solution or hidden-test delimiters, no import of the in-kernel checker
-(``autograder.incell``), no model answer of a manually graded cell, no outputs.
+(``autograder.incell``), no model answer of a manually graded cell, no outputs; and every
+solution and test code cell tagged ``raises-exception``, so that Run All on an untouched release
+runs past the stubs to every figure and explorer.
 
     python -m autograder release --out dist/            # -> dist/tripos2006/q1_imaging.ipynb ...
 """
