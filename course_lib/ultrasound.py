@@ -16,7 +16,7 @@ between them, and a probe scans them from above. The scanner converts each echo'
 
 The three graded functions are :func:`displayed_thickness`, :func:`displayed_depths` and
 :func:`round_trip_attenuation_db`. :func:`simulate_bscan` renders a 2-D B-scan of the exam's
-phantom (:func:`exam_phantom`) from interface reflections and speckle, and
+phantom (:func:`exam_phantom`, with sizes of our choosing: the exam gives none) from interface reflections and speckle, and
 :func:`phantom_interfaces` gives the true and displayed depth of every interface per image column.
 
 Equations
@@ -347,6 +347,9 @@ def material_properties(name: str, speeds=None) -> dict[str, float]:
 def exam_phantom(fat_thickness=40.0, liver_thickness=40.0, water_thickness=40.0,
                  block_width=15.0, gap=10.0, top=10.0, floor_depth=60.0) -> dict:
     """The Q1(c) phantom: fat, liver and water blocks side by side in a water bath (mm).
+
+    The exam fixes the materials and the layout only; every size here (and the 5 MHz the
+    notebook uses) is the course's reconstruction.
 
     Parameters
     ----------
