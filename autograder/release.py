@@ -4,7 +4,9 @@ The student notebooks come out of nbgrader's own ``generate_assignment`` (run in
 course root, ``course/`` at the repository root unless ``--course-root`` says otherwise, whose
 gradebook then holds the assignment for grading). They are copied to ``--out/tripos2006/`` only
 after a leak check: no solution or hidden-test delimiters, no import of the in-kernel checker
-(``autograder.incell``), no model answer of a manually graded cell, no outputs.
+(``autograder.incell``), no model answer of a manually graded cell, no outputs; and every
+solution and test code cell tagged ``raises-exception``, so that Run All on an untouched release
+runs past the stubs to every figure and explorer.
 
     python -m autograder release --out dist/            # -> dist/tripos2006/q1_imaging.ipynb ...
 """
@@ -37,8 +39,16 @@ FORBIDDEN = (
 )
 
 
+#: Cell tag that lets Run All (JupyterLab, nbclient) continue past a cell that raises.
+RUN_ALL_TAG = "raises-exception"
+
+
 class ReleaseLeak(RuntimeError):
     """A release notebook contains something a student must not see."""
+
+
+class ReleaseNotRunnable(RuntimeError):
+    """Run All on an untouched release notebook would stop at a stub or a failing test."""
 
 
 def leaks(notebook: Path) -> list[str]:
@@ -61,12 +71,38 @@ def leaks(notebook: Path) -> list[str]:
     return problems
 
 
+def untagged_cells(notebook: Path) -> list[str]:
+    """Solution and test code cells of ``notebook`` without the ``raises-exception`` tag.
+
+    On an untouched release every solution cell is a stub that raises and every test cell fails;
+    the tag (kept by nbgrader from the source notebook) lets Run All go on to the figures below.
+    """
+    nb = nbformat.read(str(notebook), as_version=4)
+    problems = []
+    for i, cell in enumerate(nb.cells):
+        meta = cell.get("metadata", {})
+        grading = meta.get("nbgrader", {})
+        if cell.cell_type != "code" or not (grading.get("solution") or grading.get("grade")):
+            continue
+        if RUN_ALL_TAG not in meta.get("tags", []):
+            problems.append(f"{notebook.name} cell {i} ({grading.get('grade_id')}): "
+                            f"no {RUN_ALL_TAG!r} tag")
+    return problems
+
+
 def check_release(notebooks: list[Path]) -> None:
-    """Raise :class:`ReleaseLeak` listing every leak in ``notebooks``."""
+    """Raise :class:`ReleaseLeak` listing every leak in ``notebooks``, then
+    :class:`ReleaseNotRunnable` listing every solution/test cell that would stop Run All."""
     problems = [p for nb in notebooks for p in leaks(Path(nb))]
     if problems:
         raise ReleaseLeak(
             "the student versions would leak instructor material:\n  " + "\n  ".join(problems)
+        )
+    untagged = [p for nb in notebooks for p in untagged_cells(Path(nb))]
+    if untagged:
+        raise ReleaseNotRunnable(
+            "Run All would stop on these cells (tag them in the source notebook):\n  "
+            + "\n  ".join(untagged)
         )
 
 

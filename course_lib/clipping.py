@@ -16,6 +16,10 @@ Contents
 Contract functions (``shared/EXERCISES.md``, notebook ``q6_clipping``):
     :func:`inside_view_volume`, :func:`to_screen`, :func:`clip_polygon`, :func:`screen_area`,
     :func:`fan_triangulate`, :func:`scanline_span`.
+The exam's triangles:
+    :func:`perspective_matrix` (camera coordinates to homogeneous 3D screen coordinates) and
+    :data:`EXAM_Q6`, the triangles A and B of Q6(b) in camera coordinates and, through the
+    matrix, in homogeneous screen coordinates.
 Further tools used by the figures, the explorer and the "going further" section:
     :func:`clip_polygons` (many polygons in one call), :func:`clip_against_plane`,
     :func:`clip_steps` (the polygon after each of the six planes),
@@ -55,6 +59,7 @@ import numpy as np
 from ._validate import as_float_array, as_int, as_points, as_scalar, as_vectors
 
 __all__ = [
+    "EXAM_Q6",
     "PLANES",
     "PLANE_NAMES",
     "clip_against_plane",
@@ -65,6 +70,7 @@ __all__ = [
     "fan_triangulate",
     "inside_view_volume",
     "is_convex",
+    "perspective_matrix",
     "polygon_area",
     "polygon_spans",
     "rasterize_triangle",
@@ -103,6 +109,90 @@ _ON_PLANE_RTOL = 1e-12
 
 
 # ------------------------------------------------------------------------------------------------
+# the perspective matrix and the exam's triangles
+
+
+def perspective_matrix(near, far, tan_half_fov=1.0) -> np.ndarray:
+    """The 4 x 4 matrix from camera coordinates to homogeneous 3D screen coordinates (Q6(a)).
+
+    Parameters
+    ----------
+    near, far : float
+        Distances of the near and far clipping planes in front of the centre of projection,
+        ``0 < near < far``.
+    tan_half_fov : float, optional
+        Tangent of half the field of view (the same horizontally and vertically); the default
+        1.0 is a 90 degree view.
+
+    Returns
+    -------
+    M : ndarray, shape (4, 4)
+        ``[X, Y, Z, w] = M @ [x_c, y_c, z_c, 1]`` with ``X = x_c / t``, ``Y = y_c / t``,
+        ``Z = far (z_c - near) / (far - near)`` and ``w = z_c`` (``t = tan_half_fov``).
+
+    Raises
+    ------
+    ValueError
+        If ``near`` or ``far`` is not a finite number with ``0 < near < far``, or
+        ``tan_half_fov`` is not positive.
+
+    Notes
+    -----
+    The camera sits at the origin and looks along ``+z_c``. The matrix makes ``w`` the depth
+    ``z_c``, so ``w`` grows with distance from the viewer and the divide by ``w`` shrinks
+    distant things. After the divide, ``z_s = far (1 - near / z_c) / (far - near)`` is 0 on the
+    near plane, 1 on the far plane and increases with depth, and the frustum
+    ``|x_c|, |y_c| <= t z_c``, ``near <= z_c <= far`` becomes the view volume
+    ``-w <= X, Y <= w``, ``0 <= Z <= w`` of Q6(a). Any positive multiple of ``[X, Y, Z, w]``
+    names the same point, so ``w`` is the depth only up to such a factor.
+
+    Examples
+    --------
+    >>> M = perspective_matrix(3.0, 6.0)
+    >>> M @ [0.0, 2.0, 4.0, 1.0]
+    array([0., 2., 2., 4.])
+    """
+    near, far = as_scalar(near, "near"), as_scalar(far, "far")
+    t = as_scalar(tan_half_fov, "tan_half_fov")
+    if not 0 < near < far:
+        raise ValueError(f"near and far must satisfy 0 < near < far, got near={near}, far={far}")
+    if not t > 0:
+        raise ValueError(f"tan_half_fov must be positive, got {t}")
+    depth_scale = far / (far - near)
+    return np.array([
+        [1.0 / t, 0.0, 0.0, 0.0],
+        [0.0, 1.0 / t, 0.0, 0.0],
+        [0.0, 0.0, depth_scale, -depth_scale * near],
+        [0.0, 0.0, 1.0, 0.0],
+    ])
+
+
+def _exam_triangles() -> dict:
+    """:data:`EXAM_Q6`, built from camera coordinates through :func:`perspective_matrix`."""
+    near, far = 3.0, 6.0
+    camera = {"A": np.array([[0.0, 0.0, 4.0], [0.0, 2.0, 4.0], [0.0, 6.0, 12.0]]),
+              "B": np.array([[0.0, 0.0, 3.0], [0.0, 1.5, 3.0], [0.0, 3.0, 6.0]])}
+    M = perspective_matrix(near, far)
+    out = {"near": near, "far": far, "matrix": M}
+    for name, pts in camera.items():
+        pts.setflags(write=False)
+        homogeneous = np.hstack([pts, np.ones((3, 1))]) @ M.T
+        homogeneous.setflags(write=False)
+        out[f"{name}_camera"], out[name] = pts, homogeneous
+    M.setflags(write=False)
+    return out
+
+
+#: The exam's triangles A and B of Q6(b). The surviving worked solutions give them only after
+#: the divide by ``w``: A is (0, 0, 0.5), (0, 0.5, 0.5), (0, 0.5, 1.5) and B the same with
+#: ``z_s`` 0.5 smaller. Here they come from camera-space points (``"A_camera"``,
+#: ``"B_camera"``) through ``perspective_matrix(near=3, far=6)`` (a 90 degree view), so each
+#: vertex's ``w`` is its depth: ``"A"`` is ``[0, 0, 2, 4], [0, 2, 2, 4], [0, 6, 18, 12]`` and
+#: ``"B"`` is ``[0, 0, 0, 3], [0, 1.5, 0, 3], [0, 3, 6, 6]``.
+EXAM_Q6 = _exam_triangles()
+
+
+# ------------------------------------------------------------------------------------------------
 # contract functions
 
 
@@ -134,9 +224,9 @@ def inside_view_volume(P) -> np.ndarray:
 
     Examples
     --------
-    The third vertex of the exam's triangle A has ``z_s = 1.5`` (here ``[0, 1, 3, 2]``):
+    The third vertex of the exam's triangle A has ``z_s = 1.5`` (``Z = 18 > w = 12``):
 
-    >>> inside_view_volume([[0, 0, 1, 2], [0, 0.5, 0.5, 1], [0, 1, 3, 2]])
+    >>> inside_view_volume(EXAM_Q6["A"])
     array([ True,  True, False])
     """
     P = as_vectors(P, 4, "P")
@@ -171,7 +261,7 @@ def to_screen(P) -> np.ndarray:
 
     Examples
     --------
-    >>> to_screen([0.0, 1.0, 3.0, 2.0])
+    >>> to_screen([0.0, 6.0, 18.0, 12.0])
     array([0. , 0.5, 1.5])
     """
     P = as_vectors(P, 4, "P")
@@ -232,8 +322,7 @@ def clip_polygon(P) -> np.ndarray:
     --------
     The exam's triangle A (``z_s`` of its third vertex is 1.5) loses a corner to the far plane:
 
-    >>> A = [[0, 0, 1, 2], [0, 0.5, 0.5, 1], [0, 1, 3, 2]]
-    >>> to_screen(clip_polygon(A))
+    >>> to_screen(clip_polygon(EXAM_Q6["A"]))
     array([[0.  , 0.  , 0.5 ],
            [0.  , 0.5 , 0.5 ],
            [0.  , 0.5 , 1.  ],
@@ -490,9 +579,7 @@ def clip_polygons(polygons) -> list[np.ndarray]:
     --------
     The exam's triangle A loses a corner to the far plane; B lies inside and comes back whole:
 
-    >>> A = [[0, 0, 1, 2], [0, 0.5, 0.5, 1], [0, 1, 3, 2]]
-    >>> B = [[0, 0, 0, 1], [0, 1, 0, 2], [0, 2, 4, 4]]
-    >>> [len(p) for p in clip_polygons([A, B])]
+    >>> [len(p) for p in clip_polygons([EXAM_Q6["A"], EXAM_Q6["B"]])]
     [4, 3]
     """
     arrays = []

@@ -49,7 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import as_float_array, as_positive, as_scalar, as_vectors
+from ._validate import as_float_array, as_int, as_positive, as_scalar, as_vectors
 
 __all__ = [
     "ALT_TRI_TABLE",
@@ -62,6 +62,7 @@ __all__ = [
     "N_TRIANGLES",
     "TRI_TABLE",
     "BaseCase",
+    "alternative_triangulation",
     "ambiguous_faces",
     "case_of",
     "case_triangles",
@@ -75,9 +76,11 @@ __all__ = [
     "interpolate_edge",
     "marching_cubes",
     "marching_cubes_loop",
+    "probe_triangulation",
     "sphere_area",
     "sphere_field",
     "sphere_volume",
+    "symmetry_orbit",
     "torus_area",
     "torus_field",
     "torus_volume",
@@ -335,6 +338,59 @@ def _cycle_lengths(perm) -> list[int]:
             n += 1
         lengths.append(n)
     return lengths
+
+
+def _case_index(index, name: str = "index") -> int:
+    """``index`` as a case number 0 ... 255; ``ValueError`` otherwise."""
+    value = as_int(index, name)
+    if not 0 <= value <= 255:
+        raise ValueError(f"{name} must be a case number from 0 to 255, got {value}")
+    return value
+
+
+def symmetry_orbit(index, complement: bool = False, reflections: bool = False) -> np.ndarray:
+    """Every case number the cube's symmetries map case ``index`` to, sorted, Q3(b).
+
+    Parameters
+    ----------
+    index : int
+        A case number, 0 ... 255 (bit ``i`` set when corner ``i`` is inside).
+    complement : bool
+        Also include the complements (inside and outside swapped) of the images.
+    reflections : bool
+        Use the 48 symmetries of the cube (rotations and reflections) instead of the 24
+        rotations.
+
+    Returns
+    -------
+    ndarray of int64, shape (m,)
+        The class (orbit) of ``index``, ascending: ``orbit[0]`` is the class's smallest case
+        number and ``len(orbit)`` its size. The sizes of all classes add up to 256.
+
+    Raises
+    ------
+    ValueError
+        If ``index`` is not an integer from 0 to 255.
+
+    Notes
+    -----
+    Q3(b) reduces the 256 patterns to 15 classes; an orbit is one of those classes written
+    out. By the orbit-stabiliser theorem its size divides the order of the group (24 or 48,
+    doubled with complement).
+
+    Examples
+    --------
+    >>> symmetry_orbit(1).tolist()           # one corner inside: any of the eight corners
+    [1, 2, 4, 8, 16, 32, 64, 128]
+    >>> len(symmetry_orbit(1, complement=True))
+    16
+    """
+    index = _case_index(index)
+    images = np.concatenate([_apply(perm, np.array([index]))
+                             for perm in cube_symmetries(bool(reflections))])
+    if complement:
+        images = np.concatenate([images, 255 - images])
+    return np.unique(images).astype(np.int64)
 
 
 @dataclass(frozen=True)
@@ -767,10 +823,17 @@ def marching_cubes_loop(volume, iso, spacing=(1.0, 1.0, 1.0)):
        already made it, otherwise interpolate a new one along the edge (:func:`interpolate_edge`).
     """
     volume, iso, spacing = _check_volume(volume, iso, spacing)
-    return _march_loop(volume, iso, spacing, alternative_cells=())
+    return _march_loop(volume, iso, spacing)
 
 
-def _march_loop(volume, iso, spacing, alternative_cells=()):
+def _table_triangles(cell, case) -> np.ndarray:
+    """The triangles (edge numbers) :data:`TRI_TABLE` gives case ``case``, whatever the cell."""
+    return TRI_TABLE[case, :N_TRIANGLES[case]]
+
+
+def _march_loop(volume, iso, spacing, triangles_of_cell=_table_triangles):
+    """The cell-by-cell march; ``triangles_of_cell((i, j, k), case)`` gives each cell's
+    triangles as rows of edge numbers (the table's by default)."""
     nx, ny, nz = volume.shape
     vertex_of_edge = {}   # grid edge (start sample, axis) -> vertex number
     verts, faces = [], []
@@ -779,11 +842,7 @@ def _march_loop(volume, iso, spacing, alternative_cells=()):
             for k in range(nz - 1):
                 values = [volume[i + dx, j + dy, k + dz] for dx, dy, dz in CORNERS]
                 case = cube_index(values, iso)
-                alt = (i, j, k) in alternative_cells
-                table = ALT_TRI_TABLE if alt else TRI_TABLE
-                for tri in table[case]:
-                    if tri[0] < 0:
-                        break
+                for tri in triangles_of_cell((i, j, k), case):
                     face = []
                     for e in tri:
                         a, b = EDGES[e]
@@ -851,9 +910,108 @@ def hole_demo(alternative: bool = True):
     volume = np.ones((5, 4, 4))
     volume[2, 1, 1] = 0.0
     volume[2, 2, 2] = 0.0
-    cells = {(1, 1, 1)} if alternative else set()
-    verts, faces = _march_loop(volume, 0.5, np.ones(3), alternative_cells=cells)
+    joined = {(1, 1, 1)} if alternative else set()
+
+    def triangles_of_cell(cell, case):
+        table, ntri = (ALT_TRI_TABLE, ALT_N_TRIANGLES) if cell in joined else (TRI_TABLE, N_TRIANGLES)
+        return table[case, :ntri[case]]
+
+    verts, faces = _march_loop(volume, 0.5, np.ones(3), triangles_of_cell)
     return volume, verts, faces
+
+
+def alternative_triangulation(index) -> np.ndarray:
+    """The other consistent triangulation of a face-ambiguous case: every ambiguous face joined.
+
+    Parameters
+    ----------
+    index : int
+        A case number 0 ... 255 with at least one ambiguous face (:func:`ambiguous_faces`):
+        one of Lorensen's cases 3, 6, 7, 10, 12 or 13, in any orientation.
+
+    Returns
+    -------
+    ndarray of int64, shape (t, 3)
+        Triangles as rows of three cube-edge numbers, wound counter-clockwise seen from the
+        outside, in which every ambiguous face *joins* its two inside corners (the table
+        :data:`TRI_TABLE` keeps them apart). Each closed loop of ``n`` crossed edges is cut into
+        ``n - 2`` triangles, none lying flat in a face of the cube. The row of
+        :data:`ALT_TRI_TABLE`.
+
+    Raises
+    ------
+    ValueError
+        If ``index`` is not a case number or has no ambiguous face (then there is no other
+        triangulation to choose).
+
+    Notes
+    -----
+    Q3(c): six of the 15 cases can be triangulated in two ways. Joining the inside corners of
+    case ``i`` is keeping apart the inside corners of its complement ``255 - i``, so this is
+    also ``TRI_TABLE[255 - i]`` with every triangle reversed (up to the choice of fan): the
+    reason why Lorensen's use of complement symmetry mixed the two choices and left holes.
+
+    Examples
+    --------
+    >>> alternative_triangulation(5).shape     # corners 0 and 2: a band of 4 triangles
+    (4, 3)
+    """
+    index = _case_index(index)
+    if not ambiguous_faces(index):
+        raise ValueError(f"case {index} has no ambiguous face: it has only one triangulation")
+    return ALT_TRI_TABLE[index, :ALT_N_TRIANGLES[index]].copy()
+
+
+def probe_triangulation(index, triangles):
+    """Mesh the cell of case ``index`` with ``triangles`` among neighbours that join, Q3(c).
+
+    A 4 x 4 x 4 volume of outside samples (value 1) whose central cell, ``(1, 1, 1)`` to
+    ``(2, 2, 2)``, has the inside corners (value 0) of case ``index``; iso-level 0.5. The central
+    cell is triangulated with ``triangles`` (rows of edge numbers) and every other cell with
+    :data:`ALT_TRI_TABLE`: each ambiguous face of the central cell is shared with a neighbour
+    that joins its inside corners, and no other cell has an ambiguous face. So the mesh is closed
+    and consistently wound exactly when ``triangles`` joins the inside corners on every
+    ambiguous face and is wound like its neighbours.
+
+    Parameters
+    ----------
+    index : int
+        The central cell's case number, 0 ... 255.
+    triangles : array_like of int, shape (t, 3)
+        Cube-edge numbers 0 ... 11.
+
+    Returns
+    -------
+    verts : ndarray, shape (V, 3)
+    faces : ndarray, shape (F, 3)
+
+    Raises
+    ------
+    ValueError
+        If ``index`` is not a case number or ``triangles`` is not ``(t, 3)`` edge numbers of
+        edges the case crosses.
+    """
+    index = _case_index(index)
+    triangles = np.asarray(triangles)
+    if triangles.size == 0:
+        triangles = triangles.reshape(0, 3)
+    if triangles.ndim != 2 or triangles.shape[1] != 3 or triangles.dtype.kind not in "iu":
+        raise ValueError(f"triangles must be integer edge numbers of shape (t, 3), got "
+                         f"{triangles.dtype} of shape {triangles.shape}")
+    if triangles.size and (triangles.min() < 0 or triangles.max() > 11
+                           or not np.all((EDGE_TABLE[index] >> triangles) & 1)):
+        raise ValueError(f"triangles must use only the edges case {index} crosses")
+    volume = np.ones((4, 4, 4))
+    for c in range(8):
+        if (index >> c) & 1:
+            volume[tuple(1 + CORNERS[c])] = 0.0
+
+    def triangles_of_cell(cell, case):
+        if cell == (1, 1, 1):
+            return triangles
+        return ALT_TRI_TABLE[case, :ALT_N_TRIANGLES[case]]
+
+    return _march_loop(volume, 0.5, np.ones(3), triangles_of_cell)
 
 
 # --------------------------------------------------------------------------------------------

@@ -7,9 +7,11 @@ Every segment of both splines is written in the exam's matrix form
 with the *same* geometry matrix ``G = [a; b; c; d]`` (four consecutive control points, one per
 row) and a 4 x 4 basis matrix ``M`` that is the only difference between the two splines (Q4(a)).
 A curve of ``N`` segments uses ``N + 3`` points; segment ``i`` takes points ``i .. i+3``. The
-curve's last segment runs from near ``b`` to near ``c``, so to make a curve reach the last
-user-given point ``c`` one invents a *phantom* point ``d`` beyond it (Q4(c)): ``d = b``,
+curve's last segment runs from (or near) ``b`` to (or near) ``c``, so to carry a curve on to the
+last user-given point ``c`` one invents a *phantom* point ``d`` beyond it (Q4(c)): ``d = b``,
 ``d = 2c - b`` or ``d = c``; at the start the mirror rule invents a point before the first one.
+Whether the curve then *reaches* ``c`` depends on the spline and the rule: Catmull-Rom always
+does, the B-spline only with ``d = 2c - b`` (with ``d = b`` it stops at ``(b + 2c) / 3``).
 
 Functions of the exercise contract: :func:`catmull_rom_basis`, :func:`bspline_basis`,
 :func:`parameter_row`, :func:`spline_eval`, :func:`end_derivatives`, :func:`phantom_point`,
@@ -109,7 +111,7 @@ def bspline_basis() -> np.ndarray:
 
     Examples
     --------
-    >>> 6 * ([1, 1, 1, 1] @ bspline_basis())
+    >>> np.round(6 * ([1, 1, 1, 1] @ bspline_basis()), 12)   # up to round-off
     array([0., 1., 4., 1.])
     """
     return _BSPLINE.copy()
@@ -212,17 +214,41 @@ def spline_eval(M, G, t, order: int = 0):
 
 
 def end_rows(M) -> np.ndarray:
-    """The weights of ``a, b, c, d`` in ``p``, ``p'`` and ``p''`` at ``t = 1``.
+    """The weights of ``a, b, c, d`` in ``p``, ``p'`` and ``p''`` at the end ``t = 1``.
+
+    Parameters
+    ----------
+    M : array_like, shape (4, 4)
+        Any basis matrix (Catmull-Rom, B-spline, Bezier, Hermite-like or none of these) in the
+        convention ``p(t) = [t^3, t^2, t, 1] @ M @ G``.
 
     Returns
     -------
     W : ndarray, shape (3, 4)
-        Row ``k`` is ``parameter_row(1, k) @ M``.
+        Row ``k`` is ``parameter_row(1, k) @ M``, i.e. ``[1 1 1 1] M``, ``[3 2 1 0] M`` and
+        ``[6 2 0 0] M``; column ``j`` belongs to control point ``j`` (``a, b, c, d``), so
+        ``W @ G`` stacks ``p(1), p'(1), p''(1)``.
+
+    Raises
+    ------
+    ValueError
+        If ``M`` is not a finite 4 x 4 array.
 
     Notes
     -----
-    Q4(b): for Catmull-Rom ``[[0, 0, 1, 0], [0, -1/2, 0, 1/2], [-1, 4, -5, 2]]``; for the
-    B-spline ``[[0, 1/6, 4/6, 1/6], [0, -1/2, 0, 1/2], [0, 1, -2, 1]]``.
+    Q4(b): multiplying the parameter rows into ``M`` before touching the points is the step the
+    examiners saw candidates slip on. For Catmull-Rom the rows are
+    ``[[0, 0, 1, 0], [0, -1/2, 0, 1/2], [-1, 4, -5, 2]]``; for the B-spline
+    ``[[0, 1/6, 4/6, 1/6], [0, -1/2, 0, 1/2], [0, 1, -2, 1]]``.
+
+    Examples
+    --------
+    >>> end_rows(np.eye(4))            # the parameter rows themselves
+    array([[1., 1., 1., 1.],
+           [3., 2., 1., 0.],
+           [6., 2., 0., 0.]])
+    >>> end_rows(catmull_rom_basis())[2]
+    array([-1.,  4., -5.,  2.])
     """
     M = _check_basis(M)
     return np.stack([parameter_row(1.0, k) @ M for k in range(3)])
@@ -363,8 +389,10 @@ def extend_with_phantoms(points, rule: str) -> np.ndarray:
 
     Notes
     -----
-    Q4(c): with phantoms at both ends a curve of ``m`` given points has ``m - 1`` segments, the
-    first starting near ``points[0]`` and the last ending near ``points[-1]``.
+    Q4(c): with phantoms at both ends a curve of ``m`` given points has ``m - 1`` segments, one
+    per pair of neighbouring given points. The Catmull-Rom curve then runs from ``points[0]``
+    to ``points[-1]``; the B-spline does so only with ``d = 2c - b`` (with ``d = b`` it stops
+    two thirds of the way from ``points[-2]`` to ``points[-1]``).
     """
     P = _check_curve_points(points, _check_rule(rule))
     start = phantom_point(P[1], P[0], rule)
@@ -444,8 +472,9 @@ def sample_curve(points, kind: str, n_per_segment: int, end_rule: str | None = N
         ``t = 0, 1/n, ..., (n-1)/n``, and the curve's very end ``t = 1`` of the last segment
         is appended.
     end_rule : {None, "d=b", "d=2c-b", "d=c"}
-        When given, a phantom point is added at each end (:func:`extend_with_phantoms`) so the
-        curve spans every given point.
+        When given, a phantom point is added at each end (:func:`extend_with_phantoms`), which
+        gives one segment per pair of neighbouring points. The curve then reaches the first and
+        last points for Catmull-Rom (every rule) and for the B-spline with ``"d=2c-b"`` only.
 
     Returns
     -------

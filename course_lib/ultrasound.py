@@ -11,17 +11,21 @@ between them, and a probe scans them from above. The scanner converts each echo'
 * everything under a block (here the floor of the bath) is displaced by the block's error;
 * echoes from under a block have crossed that block twice and are weaker by its round-trip
   attenuation ``2 * alpha * f * T`` dB (equation (2)), so the floor is brighter under the gaps.
+  (That is the soft-tissue law, loss in proportion to frequency; water's much smaller loss grows
+  as ``f**2``, equation (2'), which :func:`attenuation_db_per_cm` and the simulator apply.)
 
 The three graded functions are :func:`displayed_thickness`, :func:`displayed_depths` and
 :func:`round_trip_attenuation_db`. :func:`simulate_bscan` renders a 2-D B-scan of the exam's
-phantom (:func:`exam_phantom`) from interface reflections and speckle, and
+phantom (:func:`exam_phantom`, with sizes of our choosing: the exam gives none) from interface reflections and speckle, and
 :func:`phantom_interfaces` gives the true and displayed depth of every interface per image column.
 
 Equations
 ---------
 (1) displayed thickness  ``T_d = T * c_assumed / c_true``
 (2) round-trip loss      ``A = 2 f sum_k alpha_k T_k``  (dB, ``alpha`` in dB/cm/MHz, ``f`` in MHz,
-    ``T`` in cm)
+    ``T`` in cm), for tissues whose attenuation is proportional to frequency
+(2') attenuation of a material with a power law, ``alpha_0 f**y`` dB/cm (``alpha_0`` in
+    dB/cm/MHz**y): ``y = 1`` for the soft tissues here, ``y = 2`` for water
 (3) pressure reflection at normal incidence from medium 1 into medium 2
     ``R = (Z2 - Z1) / (Z2 + Z1)``, ``Z = rho c``; the two-way amplitude transmission through an
     interface is ``(1 + R)(1 - R) = 1 - R**2``.
@@ -35,15 +39,17 @@ appendix B; P. R. Hoskins, K. Martin and A. Thrush, *Diagnostic Ultrasound: Phys
 Equipment* (2nd ed., CUP, 2010), ch. 2. Measured speeds spread by about +-2% between specimens
 and with temperature; attenuation spreads far more (fat 0.5-1.8, liver 0.4-1.0 dB/cm/MHz).
 
-========  =======  =======  ============  =========  ==============================
-material  c (m/s)  rho      alpha (dB/    scatter    notes
-                   (kg/m3)  cm/MHz)
-========  =======  =======  ============  =========  ==============================
-water     1482     998      0.0022        0          20 C; alpha really grows as f^2
-fat       1450     950      0.60          0.5        hypoechoic, weak speckle
-liver     1578     1060     0.50          1.0        reference speckle level
-acrylic   2750     1190     6.4           0          PMMA bath floor (Szabo app. B)
-========  =======  =======  ============  =========  ==============================
+========  =======  =======  ==============  =====  =======  ============================
+material  c (m/s)  rho      alpha_0 (dB/    y      scatter  notes
+                   (kg/m3)  cm/MHz**y)
+========  =======  =======  ==============  =====  =======  ============================
+water     1482     998      0.0022          2      0        20 C (Duck): 0.055 dB/cm at 5 MHz
+fat       1450     950      0.60            1      0.5      hypoechoic, weak speckle
+liver     1578     1060     0.50            1      1.0      reference speckle level
+acrylic   2750     1190     6.4             1      0        PMMA bath floor (Szabo app. B)
+========  =======  =======  ==============  =====  =======  ============================
+
+``alpha`` is ``alpha_0`` and ``alpha_power`` is ``y`` in :data:`MATERIALS`.
 
 ``scatter`` is the relative r.m.s. amplitude of the sub-resolution scatterers (speckle) in this
 simulator, not a measured quantity.
@@ -59,13 +65,14 @@ from ._validate import as_float_array, as_int, as_positive, as_scalar
 C_ASSUMED = 1540.0
 
 #: Acoustic properties used by the simulator: speed ``c`` (m/s), density ``rho`` (kg/m^3),
-#: attenuation ``alpha`` (dB/cm/MHz) and relative speckle amplitude ``scatter``.
+#: attenuation ``alpha * f**alpha_power`` (dB/cm, ``f`` in MHz) and relative speckle amplitude
+#: ``scatter``.
 #: Sources in the module docstring.
 MATERIALS: dict[str, dict[str, float]] = {
-    "water": {"c": 1482.0, "rho": 998.0, "alpha": 0.0022, "scatter": 0.0},
-    "fat": {"c": 1450.0, "rho": 950.0, "alpha": 0.60, "scatter": 0.5},
-    "liver": {"c": 1578.0, "rho": 1060.0, "alpha": 0.50, "scatter": 1.0},
-    "acrylic": {"c": 2750.0, "rho": 1190.0, "alpha": 6.4, "scatter": 0.0},
+    "water": {"c": 1482.0, "rho": 998.0, "alpha": 0.0022, "alpha_power": 2.0, "scatter": 0.0},
+    "fat": {"c": 1450.0, "rho": 950.0, "alpha": 0.60, "alpha_power": 1.0, "scatter": 0.5},
+    "liver": {"c": 1578.0, "rho": 1060.0, "alpha": 0.50, "alpha_power": 1.0, "scatter": 1.0},
+    "acrylic": {"c": 2750.0, "rho": 1190.0, "alpha": 6.4, "alpha_power": 1.0, "scatter": 0.0},
 }
 
 #: Reflection coefficient given to the faces of a block whose impedance equals the bath's (the
@@ -211,14 +218,17 @@ def round_trip_attenuation_db(alpha_db_per_cm_mhz, freq_mhz, thickness_cm):
     -----
     Q1(c), equation (2) of this module: the attenuation of soft tissue grows roughly in
     proportion to frequency, so a layer costs ``alpha f T`` dB each way. This is why the floor of
-    the bath is brighter below the gaps, where the beam has crossed only water.
+    the bath is brighter below the gaps, where the beam has crossed only water. A material whose
+    loss is not proportional to ``f`` (water, ``f**2``) enters with its coefficient at that one
+    frequency, ``attenuation_db_per_cm(name, f) / f``.
 
     Examples
     --------
     >>> round(round_trip_attenuation_db(0.6, 5.0, 4.0), 6)    # 4 cm of fat at 5 MHz
     24.0
-    >>> round(round_trip_attenuation_db([0.0022, 0.5], 5.0, [2.0, 4.0]), 3)
-    20.044
+    >>> water = attenuation_db_per_cm("water", 5.0) / 5.0     # 0.011 dB/cm/MHz at 5 MHz
+    >>> round(round_trip_attenuation_db([water, 0.5], 5.0, [2.0, 4.0]), 3)
+    20.22
     """
     a = as_positive(alpha_db_per_cm_mhz, "alpha_db_per_cm_mhz", allow_zero=True)
     t = as_positive(thickness_cm, "thickness_cm", allow_zero=True)
@@ -238,6 +248,49 @@ def round_trip_attenuation_db(alpha_db_per_cm_mhz, freq_mhz, thickness_cm):
 
 # --------------------------------------------------------------------------------------------
 # acoustic helpers
+
+
+def attenuation_db_per_cm(material: str, freq_mhz) -> float:
+    """One-way attenuation (dB/cm) of a named material at ``freq_mhz``: ``alpha_0 f**y``.
+
+    Parameters
+    ----------
+    material : str
+        A key of :data:`MATERIALS`.
+    freq_mhz : float
+        Frequency (MHz), > 0.
+
+    Returns
+    -------
+    float
+        ``MATERIALS[material]["alpha"] * freq_mhz ** MATERIALS[material]["alpha_power"]``.
+
+    Raises
+    ------
+    ValueError
+        An unknown material or a non-positive frequency.
+
+    Notes
+    -----
+    Q1(c), equation (2'). Soft tissue loses about in proportion to frequency (``y = 1``), so
+    ``alpha_0`` in dB/cm/MHz goes straight into equation (2); water's loss grows as ``f**2``
+    (0.0022 dB/cm/MHz**2 at 20 C, Duck 1990), so at 5 MHz water costs 0.055 dB/cm, i.e.
+    ``0.011`` dB/cm/MHz as a frequency-proportional coefficient at that one frequency.
+
+    Examples
+    --------
+    >>> round(attenuation_db_per_cm("water", 5.0), 6)
+    0.055
+    >>> round(attenuation_db_per_cm("liver", 5.0), 6)
+    2.5
+    """
+    if material not in MATERIALS:
+        raise ValueError(f"unknown material {material!r}; known: {sorted(MATERIALS)}")
+    f = as_scalar(freq_mhz, "freq_mhz")
+    if f <= 0:
+        raise ValueError(f"freq_mhz must be positive, got {f}")
+    props = MATERIALS[material]
+    return float(props["alpha"] * f ** props["alpha_power"])
 
 
 def reflection_coefficient(z1, z2):
@@ -294,6 +347,9 @@ def material_properties(name: str, speeds=None) -> dict[str, float]:
 def exam_phantom(fat_thickness=40.0, liver_thickness=40.0, water_thickness=40.0,
                  block_width=15.0, gap=10.0, top=10.0, floor_depth=60.0) -> dict:
     """The Q1(c) phantom: fat, liver and water blocks side by side in a water bath (mm).
+
+    The exam fixes the materials and the layout only; every size here (and the 5 MHz the
+    notebook uses) is the course's reconstruction.
 
     Parameters
     ----------
@@ -537,7 +593,7 @@ def simulate_bscan(blocks, floor_depth, width, *, bath="water", speeds=None, fre
     :data:`WALL_REFLECTION` for a block matched to the bath); (ii) speckle from random
     sub-resolution scatterers, about four per wavelength per scan line at random depths, with
     Gaussian amplitudes scaled by the material's ``scatter``; both weakened by ``10**(-A/20)``
-    with ``A`` the round-trip loss of equation (2) down to the echo, and by ``1 - R**2`` per
+    with ``A`` the round-trip loss of equations (2) and (2') down to the echo, and by ``1 - R**2`` per
     interface crossed. Echoes are summed coherently as complex base-band phasors
     ``a exp(-2 i k0 z_true)`` at their displayed depth, blurred by a Gaussian pulse (axially) and
     beam (laterally), and the envelope is log-compressed. Simplifications: straight vertical
@@ -565,13 +621,13 @@ def simulate_bscan(blocks, floor_depth, width, *, bath="water", speeds=None, fre
     x = (np.arange(nx) + 0.5) * dx
     _names, props, top, thick, mat, wall, _k = _column_layers(blocks, floor, x, bath, speeds)
     c = np.array([p["c"] for p in props])[mat]
-    alpha = np.array([p["alpha"] for p in props])[mat]
+    alpha_f = np.array([p["alpha"] * f ** p["alpha_power"] for p in props])[mat]  # dB/cm
     imp = np.array([p["Z"] for p in props])[mat]
     scat = np.array([p["scatter"] for p in props])[mat]
 
     # per layer top: displayed depth, two-way loss (dB) and two-way interface transmission
     disp_top = np.cumsum(thick * ca / c, axis=1) - thick * ca / c
-    loss_top = np.cumsum(0.2 * f * alpha * thick, axis=1) - 0.2 * f * alpha * thick
+    loss_top = np.cumsum(0.2 * alpha_f * thick, axis=1) - 0.2 * alpha_f * thick
     z_above = np.concatenate([imp[:, :1], imp[:, :-1]], axis=1)
     refl = (imp - z_above) / (imp + z_above) + wall
     refl[:, 0] = 0.0
@@ -614,7 +670,7 @@ def simulate_bscan(blocks, floor_depth, width, *, bath="water", speeds=None, fre
     keep = gain_layer[idx] > 0  # water has no scatterers
     idx, amp, dz = idx[keep], amp.ravel()[keep], (z_sc.ravel() - top.ravel()[idx])[keep]
     p0 = (-neper * loss_top - 2j * k0 * disp_top).ravel()
-    slope = (-neper * 0.2 * f * alpha - 2j * k0 * ca / c).ravel()
+    slope = (-neper * 0.2 * alpha_f - 2j * k0 * ca / c).ravel()
     d_sc = disp_top.ravel()[idx] + dz * (ca / c).ravel()[idx]
     ph_sc = amp * gain_layer[idx] * np.exp(p0[idx] + slope[idx] * dz)
     col_sc = idx // n_layers

@@ -1,8 +1,9 @@
 """Q1 imaging modalities and B-scan artefacts: grading rules.
 
 Three graded functions of Q1(c) (``course_lib.ultrasound``) and the multiple-choice items of
-Q1(a) and Q1(b). The visible cases carry the exam's phantom (40 mm blocks of fat, liver and water
-under 10 mm of water, scanner at 1540 m/s); the hidden ones are drawn from ``rng``.
+Q1(a) and Q1(b). The visible cases carry the course's phantom, a reconstruction (the exam gives
+no sizes: 40 mm blocks of fat, liver and water under 10 mm of water, 5 MHz; the scanner's
+1540 m/s is the exam's); the hidden ones are drawn from ``rng``.
 """
 
 from __future__ import annotations
@@ -13,13 +14,17 @@ from .base import Case, Exercise, close
 
 # speeds (m/s) and attenuations (dB/cm/MHz) of the course's material table
 _C = {name: p["c"] for name, p in ultrasound.MATERIALS.items()}
-_ALPHA = {name: p["alpha"] for name, p in ultrasound.MATERIALS.items()}
+# attenuation as a frequency-proportional coefficient (dB/cm/MHz) at the phantom's 5 MHz: water's
+# loss grows as f^2, so its coefficient holds only at that frequency
+_F_MHZ = 5.0
+_ALPHA = {name: ultrasound.attenuation_db_per_cm(name, _F_MHZ) / _F_MHZ
+          for name in ultrasound.MATERIALS}
 
 
 def _displayed_thickness_cases(rng):
-    yield Case(args=(40.0, _C["fat"]), label="exam Q1(c): 40 mm of fat", visible=True)
-    yield Case(args=(40.0, _C["liver"]), label="exam Q1(c): 40 mm of liver", visible=True)
-    yield Case(args=(40.0, _C["water"]), label="exam Q1(c): 40 mm of water", visible=True)
+    yield Case(args=(40.0, _C["fat"]), label="course phantom: 40 mm of fat", visible=True)
+    yield Case(args=(40.0, _C["liver"]), label="course phantom: 40 mm of liver", visible=True)
+    yield Case(args=(40.0, _C["water"]), label="course phantom: 40 mm of water", visible=True)
     yield Case(args=(25.0, 1540.0), label="speed equal to the assumed one", visible=True)
     yield Case(args=(-1.0, 1450.0), label="negative thickness", raises=ValueError, visible=True)
     # hidden: random scalars, batches, broadcasting, a different assumed speed, edges
@@ -45,9 +50,9 @@ def _displayed_thickness_cases(rng):
 
 def _displayed_depths_cases(rng):
     yield Case(args=((10.0, 40.0, 10.0), (_C["water"], _C["fat"], _C["water"])),
-               label="exam Q1(c): water, fat block, water down to the floor", visible=True)
+               label="course phantom: water, fat block, water down to the floor", visible=True)
     yield Case(args=((10.0, 40.0, 10.0), (_C["water"], _C["liver"], _C["water"])),
-               label="exam Q1(c): water, liver block, water down to the floor", visible=True)
+               label="course phantom: water, liver block, water down to the floor", visible=True)
     yield Case(args=((10.0, 20.0), (1500.0, 1600.0, 1540.0)), label="mismatched lengths",
                raises=ValueError, visible=True)
     # hidden
@@ -67,10 +72,11 @@ def _displayed_depths_cases(rng):
 
 
 def _round_trip_cases(rng):
-    yield Case(args=(_ALPHA["fat"], 5.0, 4.0), label="exam phantom: 4 cm of fat at 5 MHz",
+    yield Case(args=(_ALPHA["fat"], _F_MHZ, 4.0), label="course phantom: 4 cm of fat at 5 MHz",
                visible=True)
-    yield Case(args=((_ALPHA["water"], _ALPHA["liver"], _ALPHA["water"]), 5.0, (1.0, 4.0, 1.0)),
-               label="exam phantom: water, liver, water down to the floor at 5 MHz",
+    yield Case(args=((_ALPHA["water"], _ALPHA["liver"], _ALPHA["water"]), _F_MHZ,
+                     (1.0, 4.0, 1.0)),
+               label="course phantom: water, liver, water down to the floor at 5 MHz",
                visible=True)
     yield Case(args=((0.5, 0.6), 3.5, (1.0, 2.0, 3.0)), label="mismatched lengths",
                raises=ValueError, visible=True)
@@ -112,10 +118,10 @@ EXERCISES = [
     Exercise(name="xray_pixel_meaning", notebook="q1_imaging", kind="choice", answer="c",
              options=_choices, description="Q1(a)(i) planar X-ray brightness"),
     # Q1(a)(ii): CT = attenuation at one point (Hounsfield units)
-    Exercise(name="ct_pixel_meaning", notebook="q1_imaging", kind="choice", answer="b",
+    Exercise(name="ct_pixel_meaning", notebook="q1_imaging", kind="choice", answer="d",
              options=_choices, description="Q1(a)(ii) CT brightness"),
     # Q1(a)(iii): PET = local rate of positron annihilations of the tracer
-    Exercise(name="pet_pixel_meaning", notebook="q1_imaging", kind="choice", answer="d",
+    Exercise(name="pet_pixel_meaning", notebook="q1_imaging", kind="choice", answer="b",
              options=_choices, description="Q1(a)(iii) PET brightness"),
     # Q1(a)(iv): B-scan = local back-scatter, weakened by the attenuation above
     Exercise(name="bscan_pixel_meaning", notebook="q1_imaging", kind="choice", answer="a",

@@ -1,10 +1,11 @@
 """Q2: the photomultiplier tube and the parallel-hole collimator (notebook ``q2_nuclear``).
 
 Five graded functions (``course_lib.gamma_camera``) and the multiple-choice items of Q2(a)-(d).
-Visible cases carry the exam's numbers as reconstructed in the notebook: Q2(c) a 1 mm hole that
-must resolve 2 mm at 200 mm is 200 mm (20 cm) long; Q2(d) a 50 mm-radius collimator of 1 mm holes
-40 mm long on rings 10 mm apart, source on axis at 1 m: 25 holes open, 0.25 %. Hidden cases are
-drawn from ``rng`` alone; bad input must raise ``ValueError``.
+Visible cases of Q2(c) use other numbers than the question's (1 mm holes resolving 2 mm at 200 mm
+are 200 mm long: the students derive that in a written answer); hidden cases vary d, L and z.
+Q2(d)'s visible cases carry the exam's numbers as reconstructed in the notebook: a 50 mm-radius
+collimator of 1 mm holes 40 mm long on rings 10 mm apart, source on axis at 1 m: 25 holes open,
+0.25 %. Hidden cases are drawn from ``rng`` alone; bad input must raise ``ValueError``.
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ def _pmt_gain_cases(rng):
 
 
 def _resolution_cases(rng):
-    yield Case(args=(1.0, 200.0, 200.0), label="exam Q2(c): d = 1 mm, L = 200 mm, z = 200 mm",
+    yield Case(args=(1.5, 30.0, 100.0), label="d = 1.5 mm, L = 30 mm, z = 100 mm: R = 6.5 mm",
                visible=True)
     yield Case(args=(1.0, 200.0, 0.0), label="source on the face: R = d", visible=True)
     yield Case(args=(1.0, 40.0, 1000.0), label="Q2(d)'s collimator, source at 1 m", visible=True)
@@ -57,7 +58,7 @@ def _resolution_cases(rng):
 
 
 def _length_cases(rng):
-    yield Case(args=(1.0, 2.0, 200.0), label="exam Q2(c): 2 mm at 200 mm -> 20 cm",
+    yield Case(args=(2.0, 3.0, 150.0), label="2 mm holes, 3 mm at 150 mm -> 300 mm",
                visible=True)
     yield Case(args=(1.0, 26.0, 1000.0), label="Q2(d)'s source: 26 mm at 1 m -> 40 mm",
                visible=True)
@@ -178,7 +179,7 @@ EXERCISES = [
     _function("open_fraction", gamma_camera.open_fraction, _open_fraction_cases,
               "Q2(d) all-or-nothing model: open area / face area"),
     # Q2(a): why each dynode is more positive than the last
-    Exercise(name="q2a_dynode_potential", notebook=NB, kind="choice", answer="b",
+    Exercise(name="q2a_dynode_potential", notebook=NB, kind="choice", answer="c",
              options=_ABCD, description="Q2(a) the rising dynode potentials accelerate the "
                                         "electrons so that each impact frees several"),
     # Q2(b): select all that apply
@@ -186,7 +187,7 @@ EXERCISES = [
              answer=frozenset({"a", "b", "c"}), options=("a", "b", "c", "d", "e"),
              description="Q2(b) proportional output, fast, efficient (not densely packed)"),
     # Q2(b): what the proportional output is good for
-    Exercise(name="q2b_energy_window", notebook=NB, kind="choice", answer="c",
+    Exercise(name="q2b_energy_window", notebook=NB, kind="choice", answer="b",
              options=_ABCD, description="Q2(b) pulse height proportional to energy lets the "
                                         "camera reject scattered photons"),
     # Q2(c): longer holes

@@ -9,9 +9,17 @@ A marching-cubes mesh is only defined up to the order of its vertices, the order
 and the starting vertex of each face (and, since the contract does not fix it, the direction in
 which all faces are wound), so :func:`same_mesh` compares the set of vertices, the numbers of
 faces, closedness, and the enclosed volume and area.
+
+``symmetry_orbit`` (Q3(b)) asks for the class of one case, written out and sorted, on random
+cases: no table of class counts answers it. ``alternative_triangulation`` (Q3(c)) has many right
+answers (the order of the triangles, the start of each, the choice of fan inside each loop), so
+:func:`same_joined_patch` checks the properties the notebook states and then that the triangles
+close up with neighbours that join the inside corners on every ambiguous face.
 """
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 
@@ -88,6 +96,66 @@ def same_mesh(expected, received, atol: float = 1e-6, rtol: float = 1e-6) -> str
     ae, ar = mesh.surface_area(ev, ef), mesh.surface_area(rv, rf)
     if not np.isclose(ar, ae, rtol=rtol, atol=1e-9):
         return f"wrong surface area (expected {ae:.6g}, got {ar:.6g}): different triangles"
+    return None
+
+
+def _as_edge_triangles(received) -> np.ndarray | str:
+    """``received`` as an int64 ``(t, 3)`` array, or the reason it is not one."""
+    if not isinstance(received, np.ndarray):
+        return f"wrong type (expected a NumPy array of shape (t, 3), got {describe(received)})"
+    if received.size == 0:
+        received = received.reshape(0, 3)
+    if received.ndim != 2 or received.shape[1] != 3:
+        return f"wrong shape (expected (t, 3) edge numbers, got {received.shape})"
+    if received.dtype.kind not in "iu":
+        if received.dtype.kind != "f" or not np.all(received == np.round(received)):
+            return f"the triangles must hold integer edge numbers, got dtype {received.dtype}"
+    return received.astype(np.int64)
+
+
+#: Each cube edge's set of faces (rows of ``mc.FACES``): a triangle whose three edges share a
+#: face lies flat in that face.
+_FACES_OF_EDGE = [frozenset(f for f, quad in enumerate(mc.FACES) if a in quad and b in quad)
+                  for a, b in mc.EDGES]
+@functools.cache
+def _case_of_answer() -> dict[bytes, int]:
+    """The reference answer of each face-ambiguous case, to find the case back from it (built
+    on first use, in the grader's process)."""
+    return {mc.alternative_triangulation(i).tobytes(): i
+            for i in range(256) if mc.ambiguous_faces(i)}
+
+
+def same_joined_patch(expected, received) -> str | None:
+    """Any triangulation of the joined contour of the expected case, up to vertex order.
+
+    The case is the one whose reference answer ``expected`` is. ``received`` must be ``(t, 3)``
+    edge numbers of edges that case crosses, as many triangles as the reference (``n - 2`` per
+    loop of ``n`` crossings), no triangle with a repeated edge or lying flat in a cube face, and
+    it must close up, consistently wound, with neighbours that join the inside corners on every
+    ambiguous face (:func:`course_lib.marching_cubes.probe_triangulation`).
+    """
+    index = _case_of_answer()[np.asarray(expected, dtype=np.int64).tobytes()]
+    tris = _as_edge_triangles(received)
+    if isinstance(tris, str):
+        return tris
+    if len(tris) != len(expected):
+        return (f"wrong number of triangles (expected {len(expected)}: n - 2 for each loop of "
+                f"n crossing points; got {len(tris)})")
+    if tris.size and (tris.min() < 0 or tris.max() > 11):
+        return "edge numbers must be 0 ... 11"
+    crossed = [e for e in range(12) if (int(mc.EDGE_TABLE[index]) >> e) & 1]
+    if not np.all(np.isin(tris, crossed)):
+        return f"a triangle uses an edge the case does not cross (crossed edges: {crossed})"
+    for tri in tris.tolist():
+        if len(set(tri)) < 3:
+            return f"the triangle {tri} repeats an edge"
+        if _FACES_OF_EDGE[tri[0]] & _FACES_OF_EDGE[tri[1]] & _FACES_OF_EDGE[tri[2]]:
+            return f"the triangle {tri} lies flat in a face of the cube"
+    _, faces = mc.probe_triangulation(index, tris)
+    if not mesh.is_closed_consistent(faces):
+        return ("the surface does not close up with neighbours that join the inside corners on "
+                "every ambiguous face (check which crossings you join on each ambiguous face, "
+                "and that the triangles are wound anticlockwise seen from outside)")
     return None
 
 
@@ -185,6 +253,40 @@ def _symmetry_cases(rng):
     yield Case(args=(True, True), label="rotations, reflections and complement")
 
 
+def _orbit_cases(rng):
+    yield Case(args=(1,), label="corner 0 inside, rotations: the eight one-corner cases",
+               visible=True)
+    yield Case(args=(5, True, False), label="corners 0 and 2 inside, rotations and complement",
+               visible=True)
+    for flags in ((False, False), (True, False), (False, True), (True, True)):
+        for _ in range(2):
+            yield Case(args=(int(rng.integers(1, 255)), *flags),
+                       label=f"random case, complement={flags[0]}, reflections={flags[1]}")
+    yield Case(args=(int(rng.choice([0, 255])), True, True), label="no corner or every corner")
+    yield Case(args=(165,), label="corners 0, 2, 5, 7 (Lorensen's case 13)")
+    yield Case(args=(256,), label="index 256", raises=ValueError)
+    yield Case(args=(-1, True), label="index -1", raises=ValueError)
+    yield Case(args=(2.5,), label="index 2.5", raises=ValueError)
+
+
+def _ambiguous_indices(rng):
+    """A random member of each of the six face-ambiguous classes (rotations and complement)."""
+    for case in mc.BASE_CASES:
+        if case.ambiguous:
+            yield int(rng.choice(mc.symmetry_orbit(case.index, complement=True)))
+
+
+def _alternative_cases(rng):
+    yield Case(args=(5,), label="corners 0 and 2 inside (Lorensen's case 3)", visible=True)
+    yield Case(args=(250,), label="its complement: corners 1, 3, 4, 5, 6, 7 inside",
+               visible=True)
+    for index in _ambiguous_indices(rng):
+        yield Case(args=(index,), label=f"a case of class {mc.case_of(index)}, random orientation")
+    yield Case(args=(int(rng.choice([1, 3, 15, 65])),),
+               label="no ambiguous face", raises=ValueError)
+    yield Case(args=(300,), label="index 300", raises=ValueError)
+
+
 def _marching_cases(rng):
     vol = np.ones((3, 3, 3))
     vol[1, 1, 1] = 0.0
@@ -276,6 +378,13 @@ EXERCISES = [
     Exercise(name="count_symmetry_classes", notebook=NB, reference=mc.count_symmetry_classes,
              cases=_symmetry_cases, compare=close(rtol=0, atol=0),
              description="Q3(b) 256 patterns into classes"),
+    Exercise(name="symmetry_orbit", notebook=NB, reference=mc.symmetry_orbit,
+             cases=_orbit_cases, compare=close(rtol=0, atol=0),
+             description="Q3(b) the class of one case under the cube's symmetries"),
+    Exercise(name="alternative_triangulation", notebook=NB,
+             reference=mc.alternative_triangulation,
+             cases=_alternative_cases, compare=same_joined_patch,
+             description="Q3(c) the other triangulation of an ambiguous case"),
     Exercise(name="marching_cubes", notebook=NB, reference=mc.marching_cubes,
              cases=_marching_cases, compare=same_mesh,
              description="Q3(a)-(c) the whole algorithm"),
@@ -291,7 +400,7 @@ EXERCISES = [
              description="Q3(d) the closed and consistently ordered condition"),
     _choice("q3a_vertex_position", "b", "Q3(a) where on the edge the vertex goes"),
     _choice("q3b_cases", "c", "Q3(b) how many cases, how many with triangles"),
-    _choice("q3c_ambiguous", "a", "Q3(c) which cases are ambiguous"),
+    _choice("q3c_ambiguous", "d", "Q3(c) which cases are ambiguous"),
     _choice("q3c_hole", "a", "Q3(c) what the ambiguity is and what goes wrong"),
-    _choice("q3d_conditions", "a", "Q3(d) conditions for the volume to be meaningful"),
+    _choice("q3d_conditions", "c", "Q3(d) conditions for the volume to be meaningful"),
 ]

@@ -1,5 +1,6 @@
 """Q4: terminating Catmull-Rom splines and B-splines (notebook ``q4_splines``).
 
+``end_rows`` is hidden-tested on matrices other than the two bases (Bezier, Hermite, random).
 Visible cases carry the exam's own rows (Q4(b): a, b, c, d as the unit vectors of R^4 turn
 ``p, p', p''`` into the weight rows ``[0 0 1 0]``, ``[0 -1/2 0 1/2]``, ``[-1 4 -5 2]``) and the
 end conditions of Q4(c); hidden cases draw random geometry in 2-D and 3-D, scalar and array
@@ -44,6 +45,35 @@ def _parameter_row_cases(rng):
     yield Case(args=(np.array([0.25]),), kwargs={"order": 2}, label="array of one value")
     yield Case(args=(0.5,), kwargs={"order": 3}, label="order 3", raises=ValueError)
     yield Case(args=(0.5,), kwargs={"order": -1}, label="order -1", raises=ValueError)
+
+
+_BEZIER = np.array([[-1.0, 3.0, -3.0, 1.0],
+                    [3.0, -6.0, 3.0, 0.0],
+                    [-3.0, 3.0, 0.0, 0.0],
+                    [1.0, 0.0, 0.0, 0.0]])
+# cubic Hermite, geometry [p0; p1; m0; m1]: "Hermite-like" (its columns are not control points)
+_HERMITE = np.array([[2.0, -2.0, 1.0, 1.0],
+                     [-3.0, 3.0, -2.0, -1.0],
+                     [0.0, 0.0, 1.0, 0.0],
+                     [1.0, 0.0, 0.0, 0.0]])
+
+
+def _end_rows_cases(rng):
+    yield Case(args=(np.eye(4),), visible=True,
+               label="M = identity: the weights are the parameter rows themselves")
+    yield Case(args=(_BEZIER,), visible=True,
+               label="Bezier basis: ends on d, tangent 3(d - c), p'' = 6(b - 2c + d)")
+    yield Case(args=(_CR,), label="exam Q4(b): the Catmull-Rom basis")
+    yield Case(args=(_BS,), label="exam Q4(b): the B-spline basis")
+    yield Case(args=(_HERMITE,), label="the cubic Hermite basis (geometry p0, p1, m0, m1)")
+    for i in range(3):
+        yield Case(args=(rng.normal(scale=3.0, size=(4, 4)),), label=f"random 4 x 4 matrix {i + 1}")
+    yield Case(args=(rng.integers(-6, 7, size=(4, 4)).astype(float),),
+               label="random matrix of small integers")
+    yield Case(args=(np.ones((3, 4)),), label="M of shape (3, 4)", raises=ValueError)
+    yield Case(args=(np.ones((4, 3)),), label="M of shape (4, 3)", raises=ValueError)
+    yield Case(args=(np.stack([_CR, _BS]),), label="two matrices, shape (2, 4, 4)",
+               raises=ValueError)
 
 
 def _spline_eval_cases(rng):
@@ -151,6 +181,8 @@ EXERCISES = [
               "Q4(b) the uniform cubic B-spline basis matrix"),
     _function("parameter_row", splines.parameter_row, _parameter_row_cases,
               "Q4(b) [t^3, t^2, t, 1] and its derivatives"),
+    _function("end_rows", splines.end_rows, _end_rows_cases,
+              "Q4(b) the 3 x 4 weights of a, b, c, d in p(1), p'(1), p''(1) for any basis M"),
     _function("end_derivatives", splines.end_derivatives, _end_derivatives_cases,
               "Q4(b) p, p', p'' at t = 1"),
     _function("spline_eval", splines.spline_eval, _spline_eval_cases,
@@ -159,19 +191,23 @@ EXERCISES = [
               "Q4(c)(i) the invented end point d"),
     _function("sample_curve", splines.sample_curve, _sample_curve_cases,
               "Q4(c)(i) a multi-segment curve with or without phantom end points"),
-    Exercise(name="q4a_segments", notebook=NB, kind="choice", answer="c",
+    Exercise(name="q4a_segments", notebook=NB, kind="choice", answer="b",
              options=("a", "b", "c", "d"),
              description="Q4(a) control points needed for N segments: N + 3"),
     Exercise(name="q4a_properties", notebook=NB, kind="choice",
-             answer=frozenset({"a", "c", "e"}), options=("a", "b", "c", "d", "e"),
-             description="Q4(a) interpolation, continuity, convex hull, shared geometry"),
-    Exercise(name="q4ci_bspline_end", notebook=NB, kind="choice", answer="c",
+             answer=frozenset({"b", "d", "e"}), options=("a", "b", "c", "d", "e"),
+             description="Q4(a) interpolation, continuity, shared geometry (not: B-spline "
+                         "through its ends, Catmull-Rom in the hull)"),
+    Exercise(name="q4ci_bspline_end", notebook=NB, kind="choice", answer="b",
              options=("a", "b", "c", "d"),
-             description="Q4(c)(i) with d = b the B-spline stops 2/3 of the way from b to c"),
-    Exercise(name="q4cii_catmull_rule", notebook=NB, kind="choice", answer="a",
+             description="Q4(c)(i) with d = b the B-spline stops at (b + 2c)/3, at rest"),
+    Exercise(name="q4ci_reaches_end", notebook=NB, kind="choice",
+             answer=frozenset({"a", "b", "d"}), options=("a", "b", "c", "d", "e"),
+             description="Q4(c)(i) which spline and rule end on the last given point"),
+    Exercise(name="q4cii_catmull_rule", notebook=NB, kind="choice", answer="c",
              options=("a", "b", "c", "d"),
              description="Q4(c)(ii) d = b suits Catmull-Rom: the end tangent is not imposed"),
-    Exercise(name="q4cii_bspline_rule", notebook=NB, kind="choice", answer="b",
+    Exercise(name="q4cii_bspline_rule", notebook=NB, kind="choice", answer="d",
              options=("a", "b", "c", "d"),
              description="Q4(c)(ii) B-spline: rest at (b+2c)/3 vs reaching c with speed"),
 ]

@@ -73,10 +73,13 @@ def _normalize_cases(rng):
 
 def _reflect_cases(rng):
     Lu = _L / np.linalg.norm(_L)
-    yield Case(args=(Lu, _N), label="exam Q5(b): unit L and N (R.V = (1 + 1/sqrt3)/2)",
-               visible=True)
     yield Case(args=(np.array([1.0, 1.0, 0.0]) / np.sqrt(2), np.array([0.0, 1.0, 0.0])),
                label="45 degrees onto the floor comes off at 45 degrees", visible=True)
+    yield Case(args=(np.array([1.0, 2.0, 2.0]) / 3.0, np.array([0.0, 0.0, 5.0])),
+               label="unit L = (1, 2, 2)/3 about N = (0, 0, 5): N must be normalised",
+               visible=True)
+    # hidden: the exam's vectors (Q5(b) asks for R.V by hand, so no visible check gives it away)
+    yield Case(args=(Lu, _N), label="exam Q5(b): unit L and N")
     for _ in range(3):
         L, N = _random_vectors(rng, scale=(1, 1)), _random_vectors(rng, scale=(1, 1))
         yield Case(args=(L, N), label="random unit L and N")
@@ -176,17 +179,17 @@ EXERCISES = [
     _function("halfway", shading.halfway, _halfway_cases, "Q5(c) the half-way vector H"),
     _function("blinn_phong", shading.blinn_phong, _model_cases,
               "Q5(c) the Blinn-Phong model, (N.H)^n"),
-    # Q5(a): what the specular exponent does
+    # Q5(a), Item Q5.1: what the specular exponent does
     Exercise(name="specular_exponent_effect", notebook=NB, kind="choice", answer="b",
-             options=_choices, description="Q5(a) the role of n"),
-    # Q5(c): when N.H saves work
+             options=_choices, description="Q5(a) Item Q5.1: the role of n"),
+    # Q5(c), Item Q5.2: when N.H saves work
     Exercise(name="halfway_saving_condition", notebook=NB, kind="choice", answer="c",
-             options=_choices, description="Q5(c) when the half-way vector is cheaper"),
-    # Q5(d): the cause of colour aliasing
-    Exercise(name="colour_aliasing_cause", notebook=NB, kind="choice", answer="d",
-             options=_choices, description="Q5(d) why three samples alias"),
-    # Q5(d): what reduces it (all that apply)
+             options=_choices, description="Q5(c) Item Q5.2: when the half-way vector is cheaper"),
+    # Q5(d), Item Q5.3: the cause of colour aliasing
+    Exercise(name="colour_aliasing_cause", notebook=NB, kind="choice", answer="c",
+             options=_choices, description="Q5(d) Item Q5.3: why three samples alias"),
+    # Q5(d), Item Q5.4: what reduces it (all that apply)
     Exercise(name="colour_aliasing_remedies", notebook=NB, kind="choice",
              answer=frozenset({"a", "c"}), options=_choices,
-             description="Q5(d) remedies for colour aliasing (all that apply)"),
+             description="Q5(d) Item Q5.4: remedies for colour aliasing (all that apply)"),
 ]

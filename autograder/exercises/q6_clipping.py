@@ -1,10 +1,13 @@
 """Q6: homogeneous clipping and triangle decomposition (notebook ``q6_clipping``).
 
-Visible cases carry the exam's own numbers: triangles A and B of Q6(b), written with ``w != 1``
-for some vertices so that the divide by ``w`` matters:
+Visible cases carry the exam's own numbers: triangles A and B of Q6(b), made homogeneous by a
+real perspective matrix (``course_lib.clipping.EXAM_Q6``: near 3, far 6, 90 degrees, ``w`` the
+depth of each vertex), so that the divide by ``w`` matters:
 
-    A = [0, 0, 1, 2], [0, 0.5, 0.5, 1], [0, 1, 3, 2]   -> screen (0,0,.5), (0,.5,.5), (0,.5,1.5)
-    B = [0, 0, 0, 1], [0, 1, 0, 2],     [0, 2, 4, 4]   -> screen (0,0,0),  (0,.5,0),  (0,.5,1)
+    A = [0, 0, 2, 4], [0, 2, 2, 4], [0, 6, 18, 12]   -> screen (0,0,.5), (0,.5,.5), (0,.5,1.5)
+    B = [0, 0, 0, 3], [0, 1.5, 0, 3], [0, 3, 6, 6]   -> screen (0,0,0),  (0,.5,0),  (0,.5,1)
+
+Hidden cases also scale vertices by arbitrary positive factors (the same projective point).
 
 A clipped polygon is only defined up to where its vertex list starts and up to a positive scale
 of each homogeneous vertex, so :func:`same_polygon` compares it that way (and forgives repeated
@@ -20,8 +23,8 @@ from course_lib import clipping
 from .base import Case, Exercise, close, describe
 
 #: The exam's triangles in homogeneous screen coordinates (see the module docstring).
-EXAM_A = np.array([[0.0, 0.0, 1.0, 2.0], [0.0, 0.5, 0.5, 1.0], [0.0, 1.0, 3.0, 2.0]])
-EXAM_B = np.array([[0.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 2.0], [0.0, 2.0, 4.0, 4.0]])
+EXAM_A = np.array(clipping.EXAM_Q6["A"])
+EXAM_B = np.array(clipping.EXAM_Q6["B"])
 NB = "q6_clipping"
 
 
@@ -276,12 +279,12 @@ EXERCISES = [
     Exercise(name="scanline_span", notebook=NB, reference=clipping.scanline_span,
              cases=_span_cases, compare=same_span,
              description="Q6(c): the one span of a triangle on a scanline"),
-    _choice("q6_why_clip", "c",
-            "Q6(a): what clipping to the view volume buys (all of the listed benefits)"),
-    _choice("q6_homogeneous_test", "b",
-            "Q6(b)(i): why test in homogeneous coordinates"),
-    _choice("q6_which_larger", "d",
-            "Q6(b)(ii): A is larger than B in the world; both are edge-on"),
-    _choice("q6_when_decompose", "a",
-            "Q6(c): decompose into triangles right after clipping"),
+    _choice("q6_why_clip", "b",
+            "Q6(a), Item Q6.1: far plane against aliasing, near plane for cut-aways"),
+    _choice("q6_homogeneous_test", "c",
+            "Q6(b)(i), Item Q6.2: camera-independent inequalities; rejects skip the divide"),
+    _choice("q6_which_larger", "b",
+            "Q6(b)(ii), Item Q6.3: A is larger than B in the world; both are edge-on"),
+    _choice("q6_when_decompose", "d",
+            "Q6(c), Item Q6.4: decompose into triangles right after clipping"),
 ]

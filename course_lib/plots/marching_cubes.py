@@ -122,16 +122,21 @@ def plot_cube_numbering(ax=None):
     return art
 
 
-def plot_base_cases(fig=None, alternative: bool = False):
-    """The 15 cases of Q3(b) in a 3 x 5 grid; returns ``(fig, [art, ...])``."""
+def plot_base_cases(fig=None, alternative: bool = False, mark_ambiguous: bool = True):
+    """The 15 cases of Q3(b) in a 3 x 5 grid; returns ``(fig, [art, ...])``.
+
+    With ``mark_ambiguous`` a star marks the six cases with an ambiguous face (Q3(c)); the
+    notebook draws the figure without it, before asking which cases those are.
+    """
     fig = fig or plt.figure(figsize=(12, 7.5))
     arts = []
     for k, case in enumerate(mc.BASE_CASES):
         ax = fig.add_subplot(3, 5, k + 1, projection="3d")
-        star = "*" if case.ambiguous else ""
+        star = "*" if mark_ambiguous and case.ambiguous else ""
         arts.append(draw_case(case.index, ax, alternative=alternative,
                               title=f"case {case.number}{star} (index {case.index})"))
-    fig.suptitle("Lorensen's 15 cases (* = ambiguous face); red corners are inside")
+    note = " (* = ambiguous face)" if mark_ambiguous else ""
+    fig.suptitle(f"Lorensen's 15 cases{note}; red corners are inside")
     return fig, arts
 
 

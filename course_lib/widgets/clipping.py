@@ -131,11 +131,11 @@ class ClippingExplorer:
                                           layout=widgets.Layout(width="110px"))
         self.vertex = widgets.Dropdown(options=[(f"vertex {k}", k) for k in range(n)], value=0,
                                        description="move", layout=widgets.Layout(width="180px"))
+        reach = max(4.0, float(np.ceil(np.max(np.abs(self.P)))))   # room for every vertex
         self.coord_sliders = [
-            widgets.FloatSlider(value=float(self.P[0, c]), min=lo_, max=hi_, step=0.05,
+            widgets.FloatSlider(value=float(self.P[0, c]), min=lo_, max=reach, step=0.05,
                                 description=name, continuous_update=True, readout_format=".2f")
-            for c, (name, lo_, hi_) in enumerate(zip(_COORDS, (-4, -4, -4, -1.5),
-                                                     (4, 4, 4, 4)))]
+            for c, (name, lo_) in enumerate(zip(_COORDS, (-reach, -reach, -reach, -1.5)))]
         self.readout = widgets.HTML()
         self.step.observe(self._on_step, names="value")
         self.prev_button.on_click(lambda _: self._nudge(-1))

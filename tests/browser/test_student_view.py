@@ -75,3 +75,36 @@ def test_student_sees_release_notebooks_and_validate_only(page, student_lab, art
     assert "Formgrader" not in items and "Course List" not in items
     # no "Create Assignment" side panel for students
     assert page.locator(".lm-TabBar-tab", has_text="Create Assignment").count() == 0
+
+
+def test_student_run_all_on_untouched_notebook_renders_explorers(page, student_lab, artifacts):
+    """A student opens an untouched release notebook and chooses Run All: the stubs and the
+    failing tests show their errors (their cells carry the ``raises-exception`` tag), and every
+    cell below them still runs, so the figures and the explorer render."""
+    from test_explorers_in_lab import _wait_idle, canvas_pixels
+
+    base, query = student_lab.split("/lab", 1)[0], student_lab.split("?", 1)[1]
+    page.goto(f"{base}/lab/tree/tripos2006/q5_phong.ipynb?{query}")
+    page.wait_for_selector(".jp-NotebookPanel .jp-Notebook .jp-Cell")
+    _wait_idle(page, 90)
+    page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
+    page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+    time.sleep(1.0)
+    _wait_idle(page, 300)
+    page.screenshot(path=str(artifacts / "student-run-all.png"))
+    # the untouched stubs fail visibly ...
+    errors = page.locator(".jp-OutputArea-output[data-mime-type='application/vnd.jupyter.stderr']")
+    assert any("NotImplementedError" in t for t in errors.all_inner_texts()), \
+        "Run All showed no stub error: did it run the solution cells at all?"
+    # ... and Run All went on past them to the last code cell
+    last_prompt = page.locator(".jp-CodeCell .jp-InputArea-prompt").last.inner_text()
+    assert re.search(r"\[\d+\]", last_prompt), f"the last code cell did not run: {last_prompt!r}"
+    # the explorer rendered: an ipympl canvas that is not blank
+    out = page.locator(".jp-OutputArea-output").filter(has=page.locator(".jupyter-matplotlib")).first
+    out.wait_for(timeout=60_000)
+    canvas = out.locator(".jupyter-matplotlib-canvas-div").first
+    pixels = canvas_pixels(canvas)
+    out.screenshot(path=str(artifacts / "student-run-all-explorer.png"))
+    assert pixels.size and float(pixels.std()) > 5.0, "the explorer's canvas is blank"
+    # and the static figures above it are images
+    assert page.locator(".jp-OutputArea-output img").count() >= 1, "no static figure rendered"

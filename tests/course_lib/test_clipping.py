@@ -19,9 +19,11 @@ from course_lib import clipping as C
 A_SCREEN = np.array([[0, 0, 0.5], [0, 0.5, 0.5], [0, 0.5, 1.5]])
 B_SCREEN = np.array([[0, 0, 0], [0, 0.5, 0], [0, 0.5, 1]])
 A_CLIPPED_SCREEN = np.array([[0, 0, 0.5], [0, 0.5, 0.5], [0, 0.5, 1], [0, 0.25, 1]])
-# Homogeneous versions used by the notebook (w = 2, 1, 2 and 1, 2, 4).
-A_H = np.array([[0, 0, 1, 2], [0, 0.5, 0.5, 1], [0, 1, 3, 2]], float)
-B_H = np.array([[0, 0, 0, 1], [0, 1, 0, 2], [0, 2, 4, 4]], float)
+# Homogeneous versions used by the notebook: camera points (0, 0, 4), (0, 2, 4), (0, 6, 12) and
+# (0, 0, 3), (0, 1.5, 3), (0, 3, 6) through the perspective with near 3, far 6, 90 degrees:
+# X = x_c, Y = y_c, Z = 2 z_c - 6, w = z_c (worked out by hand).
+A_H = np.array([[0, 0, 2, 4], [0, 2, 2, 4], [0, 6, 18, 12]], float)
+B_H = np.array([[0, 0, 0, 3], [0, 1.5, 0, 3], [0, 3, 6, 6]], float)
 
 SQUARE = box(-1, -1, 1, 1)
 SETTINGS = settings(max_examples=60, deadline=None,
@@ -65,6 +67,60 @@ def star_polygon(rng, n):
 
 # ------------------------------------------------------------------------------------------------
 # the exam's numbers
+
+
+def test_exam_triangles_come_from_the_perspective_matrix():
+    np.testing.assert_allclose(C.EXAM_Q6["A"], A_H, atol=1e-12)
+    np.testing.assert_allclose(C.EXAM_Q6["B"], B_H, atol=1e-12)
+    # w is the depth z_c of each camera-space vertex, so it grows with distance
+    np.testing.assert_allclose(C.EXAM_Q6["A"][:, 3], C.EXAM_Q6["A_camera"][:, 2], atol=1e-12)
+    np.testing.assert_allclose(C.EXAM_Q6["B"][:, 3], C.EXAM_Q6["B_camera"][:, 2], atol=1e-12)
+
+
+def test_exam_w_grows_with_depth():
+    """The notebook says w grows with depth: vertices at the same z_s share w, deeper ones have
+    larger w (checked on the divided coordinates of all six vertices)."""
+    P = np.vstack([C.EXAM_Q6["A"], C.EXAM_Q6["B"]])
+    z_s, w = P[:, 2] / P[:, 3], P[:, 3]
+    order = np.argsort(z_s, kind="stable")
+    assert np.all(np.diff(w[order]) >= 0)
+    for i in range(len(P)):
+        for j in range(len(P)):
+            if np.isclose(z_s[i], z_s[j]):
+                assert np.isclose(w[i], w[j])
+            elif z_s[i] < z_s[j]:
+                assert w[i] < w[j]
+
+
+def test_perspective_matrix_maps_the_frustum_onto_the_view_volume():
+    """Near plane -> z_s = 0, far plane -> z_s = 1, window edges -> x_s, y_s = +-1, w = depth,
+    and z_s = far (1 - near / z_c) / (far - near) (the analytic form), for random cameras."""
+    rng = np.random.default_rng(6)
+    for _ in range(20):
+        near = rng.uniform(0.1, 5.0)
+        far = near + rng.uniform(0.1, 50.0)
+        t = rng.uniform(0.2, 3.0)
+        M = C.perspective_matrix(near, far, t)
+        z = rng.uniform(0.5 * near, 2.0 * far, 200)
+        x, y = rng.uniform(-1.5, 1.5, (2, 200)) * t * z
+        P = np.stack([x, y, z, np.ones_like(z)], axis=1) @ M.T
+        np.testing.assert_allclose(P[:, 3], z, atol=1e-12)
+        s = P[:, :3] / P[:, 3:]
+        np.testing.assert_allclose(s[:, 2], far * (1 - near / z) / (far - near), rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(s[:, :2], np.stack([x, y], axis=1) / (t * z[:, None]), atol=1e-12)
+        inside = (np.abs(x) <= t * z) & (np.abs(y) <= t * z) & (near <= z) & (z <= far)
+        margin = np.minimum.reduce([t * z - np.abs(x), t * z - np.abs(y), z - near, far - z])
+        clear = np.abs(margin) > 1e-9 * far
+        assert np.array_equal(C.inside_view_volume(P)[clear], inside[clear])
+        ends = np.array([[0.0, 0.0, near, 1.0], [0.0, 0.0, far, 1.0]]) @ M.T
+        np.testing.assert_allclose(ends[:, 2] / ends[:, 3], [0.0, 1.0], atol=1e-12)
+
+
+@pytest.mark.parametrize("args", [(0.0, 1.0), (2.0, 1.0), (1.0, 1.0), (-1.0, 2.0),
+                                  (1.0, 2.0, 0.0), (1.0, np.inf), ([1.0, 2.0], 3.0)])
+def test_perspective_matrix_rejects_bad_planes(args):
+    with pytest.raises(ValueError):
+        C.perspective_matrix(*args)
 
 
 def test_exam_screen_coordinates():
@@ -714,13 +770,13 @@ def test_clip_polygons_mixed_sizes_and_forms():
     polys = [random_homogeneous_polygon(rng, n, negative_w=n % 2 == 0)
              for n in (3, 4, C._SMALL_POLYGON + 10, 5, 3, 9)]
     polys.append(A_H.tolist())                  # a nested list
-    polys.append(B_H.astype(int))               # an integer array
+    polys.append((2 * B_H).astype(int))         # an integer array (B, each vertex scaled by 2)
     got = C.clip_polygons(polys)
     for P, g in zip(polys, got):
         np.testing.assert_array_equal(g, C.clip_polygon(P))
         assert g.shape == naive_sutherland_hodgman(P).shape
     np.testing.assert_allclose(C.to_screen(got[-2]), A_CLIPPED_SCREEN, atol=1e-12)
-    np.testing.assert_array_equal(got[-1], B_H)
+    np.testing.assert_array_equal(got[-1], 2 * B_H)
     # writing into one result touches no other
     before = [g.copy() for g in got]
     got[0][...] = -1.0

@@ -572,3 +572,130 @@ def test_base_case_volumes_are_closed_when_padded():
         _verts, faces = mc.marching_cubes(vol, 0.5)
         assert mesh.is_closed_consistent(faces)
         assert (len(faces) > 0) == (case.number > 0)
+
+
+# --------------------------------------------------------------------------------------------
+# one case's class (Q3(b)) and the other triangulation of an ambiguous case (Q3(c))
+
+
+@pytest.mark.parametrize("complement, reflections",
+                         list(itertools.product((False, True), repeat=2)))
+def test_symmetry_orbit_is_the_class_of_an_independent_enumeration(complement, reflections):
+    classes = _orbits(complement, reflections)
+    for orbit in classes:
+        for index in orbit:
+            got = mc.symmetry_orbit(index, complement, reflections)
+            assert got.dtype.kind == "i" and got.tolist() == sorted(orbit)
+    # orbit-stabiliser: every class size divides the order of the group
+    order = (48 if reflections else 24) * (2 if complement else 1)
+    assert all(order % len(orbit) == 0 for orbit in classes)
+
+
+def test_symmetry_orbit_exam_numbers_and_errors():
+    # one inside corner can be any of the eight; with complement, also one outside corner
+    assert mc.symmetry_orbit(1).tolist() == [1 << c for c in range(8)]
+    assert mc.symmetry_orbit(1, complement=True).tolist() == sorted(
+        [1 << c for c in range(8)] + [255 - (1 << c) for c in range(8)])
+    # the 15 classes of Q3(b) cover the 256 cases exactly once
+    reps = [c.index for c in mc.BASE_CASES]
+    assert sum(len(mc.symmetry_orbit(r, complement=True)) for r in reps) == 256
+    for bad in (256, -1, 2.5, True, "3"):
+        with pytest.raises(ValueError):
+            mc.symmetry_orbit(bad)
+
+
+def _probe_trimesh(index, triangles):
+    verts, faces = mc.probe_triangulation(index, triangles)
+    return trimesh.Trimesh(verts, faces, process=False)
+
+
+AMBIGUOUS = [i for i in range(256) if mc.ambiguous_faces(i)]
+
+
+def test_ambiguous_indices_are_the_six_classes():
+    classes = {mc.case_of(i) for i in AMBIGUOUS}
+    assert classes == {3, 6, 7, 10, 12, 13}
+    assert len(AMBIGUOUS) == sum(len(mc.symmetry_orbit(c.index, complement=True))
+                                 for c in mc.BASE_CASES if c.ambiguous)
+
+
+@pytest.mark.parametrize("index", AMBIGUOUS)
+def test_alternative_triangulation_closes_only_with_joining_neighbours(index):
+    alt = mc.alternative_triangulation(index)
+    tm = _probe_trimesh(index, alt)
+    assert tm.is_watertight and tm.is_winding_consistent and tm.volume > 0
+    # an independent route to the same surface: the complement's table row, reversed
+    comp = mc.TRI_TABLE[255 - index, :mc.N_TRIANGLES[255 - index]][:, ::-1]
+    assert len(comp) == len(alt)
+    tm = _probe_trimesh(index, comp)
+    assert tm.is_watertight and tm.is_winding_consistent
+    # the table's own choice (inside corners apart) and the reversed surface both leave holes
+    assert not _probe_trimesh(index, mc.TRI_TABLE[index, :mc.N_TRIANGLES[index]]).is_watertight
+    assert not _probe_trimesh(index, alt[:, ::-1]).is_winding_consistent
+    # with the table's choice in every cell (marching_cubes) the same volume closes as well
+    verts, faces = mc.marching_cubes(_probe_volume(index), 0.5)
+    assert trimesh.Trimesh(verts, faces, process=False).is_watertight
+
+
+def _probe_volume(index):
+    vol = np.ones((4, 4, 4))
+    for c, (x, y, z) in enumerate(CORNER_XYZ):
+        if index >> c & 1:
+            vol[1 + x, 1 + y, 1 + z] = 0.0
+    return vol
+
+
+@pytest.mark.parametrize("bad", [1, 3, 15, 65, 256, -1, 2.5])
+def test_alternative_triangulation_errors(bad):
+    with pytest.raises(ValueError):
+        mc.alternative_triangulation(bad)
+
+
+def test_joined_patch_rule_accepts_every_valid_answer_and_names_the_fault():
+    from autograder.exercises.q3_marching_cubes import same_joined_patch
+
+    rng = np.random.default_rng(3)
+    for index in AMBIGUOUS:
+        expected = mc.alternative_triangulation(index)
+        # vertex order within each triangle (cyclic shift) and triangle order do not matter
+        shuffled = np.roll(expected, int(rng.integers(3)), axis=1)[rng.permutation(len(expected))]
+        assert same_joined_patch(expected, shuffled) is None
+        comp = mc.TRI_TABLE[255 - index, :mc.N_TRIANGLES[255 - index]][:, ::-1]
+        assert same_joined_patch(expected, comp.astype(float)) is None
+        own = mc.TRI_TABLE[index, :mc.N_TRIANGLES[index]]
+        assert same_joined_patch(expected, own) is not None
+        assert same_joined_patch(expected, expected[:, ::-1]) is not None
+        assert same_joined_patch(expected, expected[1:]) is not None
+        assert same_joined_patch(expected, expected.tolist()) is not None
+        uncrossed = [e for e in range(12) if not (int(mc.EDGE_TABLE[index]) >> e) & 1]
+        if uncrossed:                                   # case 13 crosses all twelve edges
+            wrong_edge = expected.copy()
+            wrong_edge[0, 0] = uncrossed[0]
+            assert "does not cross" in same_joined_patch(expected, wrong_edge)
+        repeated = expected.copy()
+        repeated[0, 1] = repeated[0, 0]
+        assert "repeats" in same_joined_patch(expected, repeated)
+
+
+def test_sphere_volume_error_quarters_when_the_spacing_halves():
+    """The notebook's claim on the sphere of Q3(d): halving the spacing quarters the error."""
+    r, c, box = 4.2, 5.6, 11.0
+    exact = 4 / 3 * np.pi * r ** 3                       # analytic, not our sphere_volume
+    errors = []
+    for h in (1.0, 0.5, 0.25, 0.125):
+        n = int(round(box / h)) + 1
+        vol = mc.sphere_field((n,) * 3, (c, c, c), spacing=(h,) * 3)
+        verts, faces = mc.marching_cubes(vol, r * r, spacing=(h,) * 3)
+        errors.append(exact - mesh.mesh_volume(verts, faces))
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    assert np.all(np.array(errors) > 0)                  # the inscribed mesh underestimates
+    assert np.all((ratios > 3.6) & (ratios < 4.4)), ratios
+
+
+def test_joined_patch_rule_rejects_a_triangle_flat_in_a_face():
+    from autograder.exercises.q3_marching_cubes import same_joined_patch
+
+    expected = mc.alternative_triangulation(5)          # corners 0 and 2: bottom face z = 0
+    flat = expected.copy()
+    flat[0] = (0, 1, 2)                                  # three crossings of the bottom face
+    assert "flat" in same_joined_patch(expected, flat)

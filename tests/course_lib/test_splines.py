@@ -63,7 +63,8 @@ def test_unit_vector_geometry_gives_the_weight_rows():
     p, p1, p2 = S.end_derivatives(CR, *np.eye(4))
     np.testing.assert_allclose(np.array([p, p1, p2]),
                                [[0, 0, 1, 0], [0, -0.5, 0, 0.5], [-1, 4, -5, 2]], atol=1e-15)
-    np.testing.assert_allclose(S.spline_eval(BS, np.eye(4), 1.0, 0), [0, 1 / 6, 4 / 6, 1 / 6], atol=1e-12)
+    np.testing.assert_allclose(S.spline_eval(BS, np.eye(4), 1.0, 0), [0, 1 / 6, 4 / 6, 1 / 6],
+                               atol=1e-15)
 
 
 # ------------------------------------------------------------------------------------------
@@ -257,12 +258,63 @@ def test_sample_curve_count_and_ends():
     np.testing.assert_allclose(out[[0, -1]], P[[1, -2]], atol=1e-13)  # from b to c, not a
     out = S.sample_curve(P, "catmull-rom", 4, end_rule="d=b")
     assert out.shape == (5 * 4 + 1, 2)
-    np.testing.assert_allclose(out[[0, -1]], P[[0, -1]], atol=1e-13)  # spans every point
+    np.testing.assert_allclose(out[[0, -1]], P[[0, -1]], atol=1e-13)  # Catmull-Rom: ends on them
     out = S.sample_curve(P, "b-spline", 3, end_rule="d=2c-b")
     np.testing.assert_allclose(out[[0, -1]], P[[0, -1]], atol=1e-13)
     out = S.sample_curve(P, "b-spline", 3, end_rule="d=b")
     np.testing.assert_allclose(out[-1], (2 * P[-2] + 4 * P[-1]) / 6, atol=1e-13)
     np.testing.assert_allclose(out[0], (2 * P[1] + 4 * P[0]) / 6, atol=1e-13)  # mirror rule
+
+
+# ------------------------------------------------------------------------------------------
+# end_rows on matrices other than the two bases (Q4(b) for any cubic in matrix form)
+
+# Bezier: p(t) = sum_j B_j(t) P_j with the Bernstein cubics; columns = coefficients t^3..1
+BEZIER = np.array([[-1.0, 3.0, -3.0, 1.0],
+                   [3.0, -6.0, 3.0, 0.0],
+                   [-3.0, 3.0, 0.0, 0.0],
+                   [1.0, 0.0, 0.0, 0.0]])
+
+
+def test_end_rows_of_bezier_are_its_textbook_end_conditions():
+    # a Bezier curve ends on its last control point, tangent 3(d - c), p'' = 6(b - 2c + d)
+    np.testing.assert_allclose(S.end_rows(BEZIER), [[0, 0, 0, 1], [0, 0, -3, 3], [0, 6, -12, 6]],
+                               atol=1e-12)
+
+
+def test_end_rows_of_identity_are_the_parameter_rows():
+    np.testing.assert_allclose(S.end_rows(np.eye(4)), [[1, 1, 1, 1], [3, 2, 1, 0], [6, 2, 0, 0]], atol=1e-12)
+
+
+@settings(max_examples=30, deadline=None)
+@given(M=arrays(np.float64, (4, 4), elements=st.floats(-10, 10)))
+def test_end_rows_match_numpy_polynomials(M):
+    """Column j of M holds the coefficients (t^3 .. 1) of point j's blending cubic; numpy's
+    polyval/polyder give its value and derivatives at t = 1 independently."""
+    want = [[np.polyval(np.polyder(M[:, j], k), 1.0) for j in range(4)] for k in range(3)]
+    np.testing.assert_allclose(S.end_rows(M), want, rtol=1e-12, atol=1e-9)
+
+
+def test_end_rows_rejects_a_non_square_basis():
+    with pytest.raises(ValueError, match="M"):
+        S.end_rows(np.ones((3, 4)))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_bspline_with_d_equals_b_does_not_reach_the_last_point(seed):
+    """Q4(c)(i): phantoms d = b leave the B-spline short of both given end points (scipy's
+    uniform BSpline as the oracle): it stops at (b + 2c)/3, which is neither c nor b."""
+    P = _random_points(20 + seed, 5)
+    ext = S.extend_with_phantoms(P, "d=b")
+    ref = BSpline(np.arange(len(ext) + 4, dtype=float), ext, 3)
+    end, start = ref(float(len(ext))), ref(3.0)
+    b, c = P[-2], P[-1]
+    np.testing.assert_allclose(end, (b + 2 * c) / 3, atol=1e-12)
+    assert np.linalg.norm(end - c) > 0.1 * np.linalg.norm(c - b)
+    assert np.linalg.norm(end - b) > 0.1 * np.linalg.norm(c - b)
+    assert np.linalg.norm(start - P[0]) > 0.1 * np.linalg.norm(P[1] - P[0])
+    out = S.sample_curve(P, "b-spline", 4, end_rule="d=b")
+    np.testing.assert_allclose(out[[0, -1]], [start, end], atol=1e-12)
 
 
 # ------------------------------------------------------------------------------------------
@@ -439,6 +491,15 @@ def test_registry_catches_common_mistakes():
                          S.phantom_point(P[-2], P[-1], end_rule)])
         return S.sample_curve(ext, kind, n)
     assert _fails("sample_curve", unmirrored)
+    # end_rows: rows multiplied into the transposed matrix; a table of the two bases' answers
+    assert _fails("end_rows", lambda M: np.stack([S.parameter_row(1.0, k) @ np.asarray(M).T
+                                                  for k in range(3)]))
+    def two_bases_only(M):
+        return S.end_rows(CR if np.allclose(M, CR) else BS)
+    assert _fails("end_rows", two_bases_only)
+    # end_rows without its ValueError for a matrix that is not 4 x 4
+    assert _fails("end_rows", lambda M: np.stack([S.parameter_row(1.0, k) @ np.asarray(M)
+                                                  for k in range(3)]))
     # accepting any rule name silently
     assert _fails("phantom_point", lambda b, c, rule: 2 * np.asarray(c, float) - b
                   if rule == "d=2c-b" else np.asarray(b if rule == "d=b" else c, float))

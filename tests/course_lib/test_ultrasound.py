@@ -1,4 +1,5 @@
-"""Tests of course_lib.ultrasound (exam Q1(c)).
+"""Tests of course_lib.ultrasound (exam Q1(c); the phantom's 40 mm blocks, 10 mm water layers
+and 5 MHz are the course's reconstruction, not the exam's numbers).
 
 Oracles: the exam's own statements (fat and water shown too long, fat worse; liver too short,
 about 10% smaller than the fat block of the same size; the floor closer under the liver and
@@ -42,6 +43,8 @@ def test_material_table_within_published_ranges():
     assert 0.3 <= us.MATERIALS["fat"]["alpha"] <= 1.8
     assert 0.3 <= us.MATERIALS["liver"]["alpha"] <= 1.0
     assert us.MATERIALS["water"]["alpha"] < 0.01
+    assert us.MATERIALS["water"]["alpha_power"] == 2.0  # water's loss grows as f^2 (Duck 1990)
+    assert {us.MATERIALS[m]["alpha_power"] for m in ("fat", "liver")} == {1.0}
     assert 900 <= us.MATERIALS["fat"]["rho"] < 1000 < us.MATERIALS["liver"]["rho"] <= 1080
 
 
@@ -124,6 +127,25 @@ def test_round_trip_splitting_a_layer_changes_nothing(alpha, f, thick, share):
     split = round_trip_attenuation_db([alpha, alpha], f, [thick * share, thick * (1 - share)])
     assert split == pytest.approx(whole, rel=1e-9, abs=1e-12)
     assert round_trip_attenuation_db(alpha, 2 * f, thick) == pytest.approx(2 * whole, abs=1e-9)
+
+
+def test_water_attenuation_grows_as_frequency_squared():
+    # Duck (1990): pure water at 20 C, 0.0022 dB/cm/MHz^2, so 0.0022 * 25 = 0.055 dB/cm at 5 MHz
+    assert us.attenuation_db_per_cm("water", 5.0) == pytest.approx(0.055, rel=1e-12)
+    assert us.attenuation_db_per_cm("water", 10.0) == pytest.approx(
+        4 * us.attenuation_db_per_cm("water", 5.0), rel=1e-12)
+    assert us.attenuation_db_per_cm("liver", 10.0) == pytest.approx(
+        2 * us.attenuation_db_per_cm("liver", 5.0), rel=1e-12)
+    # 4 cm of water, down and back, at 5 MHz: 2 * 4 * 0.055 = 0.44 dB (not 0.1 dB)
+    water = us.attenuation_db_per_cm("water", 5.0) / 5.0
+    assert round_trip_attenuation_db(water, 5.0, 4.0) == pytest.approx(0.44, rel=1e-12)
+
+
+def test_attenuation_db_per_cm_rejects_bad_input():
+    with pytest.raises(ValueError, match="unknown material"):
+        us.attenuation_db_per_cm("bone", 5.0)
+    with pytest.raises(ValueError, match="freq_mhz"):
+        us.attenuation_db_per_cm("water", 0.0)
 
 
 # --------------------------------------------------------------------------------------------
@@ -320,10 +342,11 @@ def test_floor_brighter_under_gaps_by_the_tissue_round_trip_loss(scan):
         return -2 * 10 * math.log10(1 - r**2)  # in and out of the block, down and up
 
     f = 5.0
-    # expected difference: 2 * alpha * f * 4 cm of tissue (minus the 4 cm of water it displaces)
+    # expected difference: 2 * 4 cm * (alpha f of the tissue minus the 0.0022 f^2 dB/cm of the
+    # water it displaces, Duck 1990)
     for level, name in ((liver, "liver"), (fat, "fat")):
         p = us.MATERIALS[name]
-        loss = 2 * f * 4.0 * (p["alpha"] - us.MATERIALS["water"]["alpha"])
+        loss = 2 * 4.0 * (p["alpha"] * f - 0.0022 * f**2)
         loss += two_way_interfaces_db(p["c"], p["rho"])
         assert gap - level == pytest.approx(loss, abs=0.5), name
     assert gap - liver > 15 and gap - fat > 15

@@ -4,7 +4,7 @@ and grading the same folder again gives the same scores.
 Each generated student hands in one or two notebooks; in each, every *independent* graded name
 (one no other solution calls) is, at random, the model answer, a wrong answer, the release stub
 (``raise NotImplementedError()``) or a deleted cell, so every expected score is known exactly by
-construction: full points, or 0 with status failed / unanswered / missing.
+construction: full points, or 0 with status failed / unanswered (the stub) / missing.
 """
 
 from __future__ import annotations

@@ -11,7 +11,7 @@ from shapely.geometry import Polygon, box
 
 from course_lib.widgets.clipping import ClippingExplorer, clipping_explorer
 
-A_H = np.array([[0, 0, 1, 2], [0, 0.5, 0.5, 1], [0, 1, 3, 2]], float)
+A_H = np.array([[0, 0, 2, 4], [0, 2, 2, 4], [0, 6, 18, 12]], float)   # the exam's A
 # exam Q6(b)(iii), (y_s, z_s) of the clipped A
 A_CLIPPED_YZ = np.array([[0, 0.5], [0.5, 0.5], [0.5, 1], [0.25, 1]])
 
@@ -65,12 +65,12 @@ def test_buttons_step_and_stop_at_the_ends(exam):
 
 
 def test_moving_a_vertex_inside_removes_the_cut(exam):
-    """Pull A's third vertex to z_s = 0.75 (Z = 1.5, w = 2): A is then entirely inside."""
+    """Pull A's third vertex to z_s = 0.75 (Z = 9, w = 12): A is then entirely inside."""
     exam.step.value = 6
     exam.vertex.value = 2
     assert [s.value for s in exam.coord_sliders] == pytest.approx(A_H[2])   # sliders synced
-    exam.coord_sliders[2].value = 1.5
-    np.testing.assert_allclose(exam.P[2], [0, 1, 1.5, 2], atol=1e-12)
+    exam.coord_sliders[2].value = 9.0
+    np.testing.assert_allclose(exam.P[2], [0, 6, 9, 12], atol=1e-12)
     expected = np.array([[0, 0.5], [0.5, 0.5], [0.5, 0.75]])
     assert cyclic_match(expected, exam.art2d["clipped"].get_xy()[:-1])
     assert "3 vertices" in exam.status.get_text()

@@ -149,6 +149,13 @@ def test_base_cases_figure():
     fig, arts = plots.plot_base_cases()
     counts = [len(np.asarray(a["surface"]._faces)) for a in arts]
     assert counts == [0, 1, 2, 2, 2, 3, 3, 3, 2, 4, 4, 4, 4, 4, 4]   # Lorensen's figure
+    starred = [a["surface"].axes.get_title().split()[1].endswith("*") for a in arts]
+    assert [k for k, s in enumerate(starred) if s] == [3, 6, 7, 10, 12, 13]   # the exam's six
+    plt.close(fig)
+    # the notebook draws it before asking which cases are ambiguous: no star, no hint
+    fig, arts = plots.plot_base_cases(mark_ambiguous=False)
+    assert not any("*" in a["surface"].axes.get_title() for a in arts)
+    assert "ambiguous" not in fig._suptitle.get_text()
     plt.close(fig)
 
 

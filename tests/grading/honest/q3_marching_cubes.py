@@ -136,3 +136,57 @@ def is_closed_consistent(faces):
         for edge in ((u, v), (v, w), (w, u)):
             directed[edge] = directed.get(edge, 0) + 1
     return all(count == 1 and directed.get((v, u), 0) == 1 for (u, v), count in directed.items())
+
+
+def symmetry_orbit(index, complement=False, reflections=False):
+    if isinstance(index, bool) or not float(index).is_integer() or not 0 <= index <= 255:
+        raise ValueError("index must be a whole number from 0 to 255")
+    index = int(index)
+    # the rotation group as the closure of two quarter turns, acting on corner positions
+    quarter_x = np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]])
+    quarter_z = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1]])
+    group, todo = {tuple(np.eye(3, dtype=int).ravel())}, [np.eye(3, dtype=int)]
+    while todo:
+        m = todo.pop()
+        for g in (quarter_x, quarter_z):
+            key = tuple((g @ m).ravel())
+            if key not in group:
+                group.add(key)
+                todo.append(g @ m)
+    mats = [np.array(k).reshape(3, 3) for k in group]
+    if reflections:
+        mats += [-m for m in mats]                      # the point reflection times each rotation
+    position = {tuple(2 * np.asarray(CORNERS[c]) - 1): c for c in range(8)}
+    members = set()
+    for m in mats:
+        image = 0
+        for c in range(8):
+            if index >> c & 1:
+                image |= 1 << position[tuple(m @ (2 * np.asarray(CORNERS[c]) - 1))]
+        members.add(image)
+        if complement:
+            members.add(image ^ 255)
+    return np.array(sorted(members), dtype=np.int64)
+
+
+def alternative_triangulation(index):
+    if isinstance(index, bool) or not float(index).is_integer() or not 0 <= index <= 255:
+        raise ValueError("index must be a whole number from 0 to 255")
+    index = int(index)
+    # the six faces found from the corner positions: four corners sharing one coordinate value
+    ambiguous = False
+    for axis in range(3):
+        for value in (0, 1):
+            quad = [c for c in range(8) if CORNERS[c][axis] == value]
+            # order the four corners around the face: by angle about the face centre
+            others = [a for a in range(3) if a != axis]
+            quad.sort(key=lambda c: np.arctan2(CORNERS[c][others[1]] - 0.5,
+                                               CORNERS[c][others[0]] - 0.5))
+            flags = [index >> c & 1 for c in quad]
+            if flags[0] == flags[2] != flags[1] == flags[3]:
+                ambiguous = True
+    if not ambiguous:
+        raise ValueError("this case has a single triangulation")
+    flipped = index ^ 255                # joining inside corners = separating the complement's
+    rows = TRI_TABLE[flipped][: N_TRIANGLES[flipped]]
+    return np.array([[e for e in reversed(row)] for row in rows], dtype=np.int64).reshape(-1, 3)

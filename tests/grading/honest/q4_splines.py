@@ -45,6 +45,17 @@ def spline_eval(M, G, t, order=0):
     return parameter_row(t, order) @ M @ G
 
 
+def end_rows(M):
+    # row k: the k-th derivative of each blending cubic (a column of M) at t = 1
+    M = np.asarray(M, dtype=float)
+    if M.shape != (4, 4):
+        raise ValueError("M must be 4 x 4")
+    rows = []
+    for k in range(3):
+        rows.append([np.polyval(np.polyder(M[:, j], k), 1.0) for j in range(4)])
+    return np.array(rows)
+
+
 def end_derivatives(M, a, b, c, d):
     M = np.asarray(M, dtype=float)
     pts = [np.asarray(p, dtype=float) for p in (a, b, c, d)]
