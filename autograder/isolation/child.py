@@ -49,7 +49,7 @@ ARRAY_DTYPES = frozenset({"|b1", "|i1", "<i2", "<i4", "<i8", "|u1", "<u2", "<u4"
 #: THE allow-list: the only parts of ``course_lib`` present in the sandbox (the data tables
 #: the Q3 setup cell imports, copied as literals by the grader). Anything else under
 #: ``course_lib`` is a reference: absent, and reported as such.
-ALLOWED_REFERENCE = {"course_lib.marching_cubes": ("CORNERS", "EDGES", "N_TRIANGLES",
+ALLOWED_REFERENCE = {"course_lib.marching_cubes": ("CORNERS", "EDGES", "FACES", "N_TRIANGLES",
                                                    "TRI_TABLE")}
 ALLOWED_COURSE_MODULES = ("course_lib", *ALLOWED_REFERENCE)
 
