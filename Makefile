@@ -9,7 +9,7 @@ STAMP  := $(VENV)/.installed
 export PATH := $(BIN):$(PATH)
 PORT   ?= 8888
 
-.PHONY: lab instructor test test-fast bench browser-deps clean
+.PHONY: lab instructor test test-fast bench browser-deps sandbox-deps clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -34,8 +34,17 @@ browser-deps:
 	  else echo "warning: not root, cannot apt-get install chromium; browser tests will be skipped"; fi; \
 	fi
 
+## sandbox-deps: Debian's bubblewrap, the grading sandbox (autograder/isolation)
+sandbox-deps:
+	@if [ ! -x /usr/bin/bwrap ]; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends bubblewrap >/dev/null 2>&1) \
+	      || echo "warning: could not install bubblewrap; the grader cannot isolate students' code"; \
+	  else echo "warning: not root, cannot apt-get install bubblewrap; the grader cannot isolate students' code"; fi; \
+	fi
+
 ## test: the whole suite (library, notebooks, grading bank, browser)
-test: $(STAMP) browser-deps
+test: $(STAMP) browser-deps sandbox-deps
 	$(BIN)/python -m pytest -n 2 --dist loadgroup -q
 
 ## bench: benchmarks against peers measured in the same run (writes benchmarks/results.md)

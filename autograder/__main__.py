@@ -3,7 +3,7 @@
 Each command lives in its own module with a ``add_arguments(parser)`` and a ``main(args)``:
 
 - ``release``  student versions through ``nbgrader generate_assignment`` (autograder/release.py)
-- ``grade``    sandboxed batch grading, CSV, feedback, report, gradebook (autograder/grading.py)
+- ``grade``    sandboxed batch grading, CSV, feedback, report, gradebook (autograder/grade/)
 - ``lab``      JupyterLab on the student or the instructor view (autograder/lab.py)
 """
 
@@ -15,7 +15,7 @@ import sys
 
 COMMANDS = {
     "release": ("autograder.release", "write the student versions of the assignment"),
-    "grade": ("autograder.grading", "grade a folder of submissions outside the students' kernels"),
+    "grade": ("autograder.grade.cli", "grade a folder of submissions outside the students' kernels"),
     "lab": ("autograder.lab", "open JupyterLab on the course (student or instructor view)"),
 }
 

@@ -11,15 +11,16 @@ The instructor's source notebooks end every graded test cell with::
 which is what plain ``nbgrader autograde`` does; it keeps the source notebooks honest (CI runs
 them, so the notebook solution must agree with the reference on every case). The grades that
 count come from ``python -m autograder grade``, which runs the same cases outside the kernel.
+Both judge with :mod:`autograder.judging`, so a case passes here exactly when it passes there.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from course_lib.answers import ChoiceFormatError, choice_letters
-
-from .exercises import NotPlainData, get, to_plain
+from .exercises import get
+from .judging import call_in_process, judge_case, judge_choice
+from .model import CaseOutcome, OutcomeKind, Verdict
 
 #: The seed of the in-kernel hidden cases (the batch grader draws its own from the course secret).
 INCELL_SEED = 4_2006
@@ -29,38 +30,20 @@ def run_cases(name: str, func, seed: int = INCELL_SEED) -> list[tuple[object, st
     """``[(case, reason_or_None), ...]`` for every case of exercise ``name`` against ``func``."""
     ex = get(name)
     results = []
-    for case in ex.draw_cases(np.random.default_rng(seed)):
-        results.append((case, judge(ex, case, func)))
+    for i, case in enumerate(ex.draw_cases(np.random.default_rng(seed))):
+        expected = ex.expected(case) if case.raises is None else None
+        verdict, reason = judge_case(ex, case, expected, call_in_process(func, case, i))
+        results.append((case, None if verdict is Verdict.PASS else reason))
     return results
-
-
-def judge(ex, case, func) -> str | None:
-    """Call ``func`` on one case and compare with the reference: ``None`` when it passes."""
-    try:
-        got = func(*case.args, **case.kwargs)
-    except Exception as exc:  # noqa: BLE001 - the student's code may raise anything
-        if case.raises is not None and isinstance(exc, case.raises):
-            return None
-        return f"raised {type(exc).__name__}: {exc}"
-    if case.raises is not None:
-        return f"should raise {case.raises.__name__} but returned a value"
-    try:
-        got = to_plain(got)
-    except NotPlainData as exc:
-        return f"returned {exc}, not plain numbers"
-    return ex.compare(ex.expected(case), got)
 
 
 def check(name: str, func_or_value) -> None:
     """Assert that a graded function (or a multiple-choice answer) passes all its cases."""
     ex = get(name)
     if ex.kind == "choice":
-        options = "".join(ex.options) if ex.options else "abcd"
-        try:
-            given = choice_letters(func_or_value, options, name=name)
-        except ChoiceFormatError as exc:
-            raise AssertionError(f"{name}: {exc}") from None
-        assert given == choice_letters("".join(ex.answer), options), f"{name}: wrong answer"
+        outcome = CaseOutcome(0, OutcomeKind.RETURNED, value=func_or_value)
+        verdict, why = judge_choice(ex, outcome)
+        assert verdict is Verdict.PASS, f"{name}: {why}"
         return
     failures = [(c, why) for c, why in run_cases(name, func_or_value) if why is not None]
     if failures:

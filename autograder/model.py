@@ -104,11 +104,21 @@ VERDICT_STATUS = {
 
 #: How a failing verdict reads in a summary ("3 wrong value, 1 timed out").
 VERDICT_WORDS = {
+    Verdict.PASS: "passed",
     Verdict.WRONG_VALUE: "wrong value", Verdict.WRONG_SHAPE: "wrong shape or type",
     Verdict.UNANSWERED: "no answer", Verdict.ERROR: "raised an error",
     Verdict.TIMEOUT: "timed out", Verdict.REJECTED: "returned something that is not plain numbers",
     Verdict.REFERENCE_USED: "used the reference",
 }
+
+
+@dataclass
+class ValueSummary:
+    """A large array as the grader keeps it after judging: its shape, dtype and first rows."""
+
+    shape: tuple
+    dtype: str
+    head: Any                       #: a small ``np.ndarray`` (the first rows)
 
 
 @dataclass
@@ -173,6 +183,81 @@ class CellResult:
     notes: list[str] = field(default_factory=list)
     seconds: float = 0.0
     code: str = ""                  #: the student's graded cell (or written answer)
+    whole_notebook: bool = False    #: the status concerns the whole notebook (missing, unreadable)
+
+
+class AnswerShape(str, enum.Enum):
+    """What a student's graded cell is, read from its source before anything runs."""
+
+    WRITTEN = "written"             #: an answer of the student's own
+    UNTOUCHED = "untouched"         #: still the released stub (``raise NotImplementedError()``)
+    EMPTY = "empty"                 #: no code at all (emptied, or only comments)
+    NONE = "none"                   #: sets the name to None
+    NOT_A_FUNCTION = "not-a-function"  #: binds a function's name to a number, a list, a string
+    WRONG_ARITY = "wrong-arity"     #: a function that cannot take the exercise's arguments
+
+
+@dataclass
+class AnswerHint:
+    """What the source of a graded cell says about its answer (see ``grade.planning``)."""
+
+    shape: AnswerShape = AnswerShape.WRITTEN
+    detail: str = ""                #: e.g. "a list", "takes 2 arguments"
+    reference: str = ""             #: what of the course's reference the cell imports, if any
+
+
+@dataclass
+class SourceCell:
+    """One cell of an instructor's source notebook."""
+
+    index: int
+    cell_type: str
+    source: str
+    meta: dict                      #: the cell's nbgrader metadata
+
+
+@dataclass
+class SourceNotebook:
+    """What the grader takes from the instructor's notebook (never from a submission)."""
+
+    name: str
+    path: Any                       #: a ``pathlib.Path``
+    nb: dict
+    setup_source: str
+    cells: list[SourceCell]
+    solution_ids: list[str]         #: grade_ids of code solution cells, in order
+    graded: list[tuple[str, str, float]]   #: (name, test grade_id, points) of auto-graded tests
+    manual: list[tuple[str, float]]        #: (grade_id, points) of manually graded answers
+
+    def cell(self, grade_id: str) -> SourceCell | None:
+        """The source cell whose grade_id is ``grade_id``, or None."""
+        return next((c for c in self.cells if c.meta.get("grade_id") == grade_id), None)
+
+
+@dataclass
+class Submission:
+    """One student's notebook as read by the grader, and which of its cells were graded."""
+
+    student: str
+    notebook: str
+    path: Any                       #: a ``pathlib.Path``
+    status: Status = Status.OK      #: OK, MISSING or UNREADABLE
+    message: str = ""
+    nb: dict | None = None
+    cells: list[dict] = field(default_factory=list)  #: index, cell_type, source, grade_id, raw
+    notes: list[str] = field(default_factory=list)
+    #: graded name -> index (in ``cells``) of the cell that was graded for it, when found by its
+    #: definition because its nbgrader metadata was gone
+    found_by_name: dict[str, int] = field(default_factory=dict)
+
+
+@dataclass
+class Batch:
+    """The outcome of a grading run: what every output is written from."""
+
+    results: list[CellResult]                       #: one per (student, notebook, graded cell)
+    submissions: dict[tuple[str, str], Submission]  #: (student, notebook) -> what was read
+    students: list[str]
 
 
 CSV_COLUMNS = ("student", "notebook", "grade_id", "score", "max_score", "status", "message")

@@ -1,12 +1,18 @@
-"""The code base passes ruff (the rules are in pyproject.toml), notebooks included."""
+"""The code base passes ruff (the rules are in pyproject.toml), notebooks included, and no
+function of the autograder is longer than 80 lines (issue 10: a grader one can read)."""
 
 from __future__ import annotations
 
+import ast
 import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 REPO = Path(__file__).resolve().parents[1]
+PACKAGE = REPO / "autograder"
+LIMIT = 80
 
 
 def test_ruff_is_clean():
@@ -56,3 +62,24 @@ def test_the_tolerance_check_catches_a_bare_assert_allclose(tmp_path):
         assert _float_compares_without_absolute_tolerance(tmp_path) == ["t.py:2 assert_allclose"]
     finally:
         REPO = saved
+
+
+def long_functions(path: Path) -> list[str]:
+    """``file:line name (n lines)`` of every function in ``path`` longer than :data:`LIMIT`."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    return [f"{path.name}:{node.lineno} {node.name} ({node.end_lineno - node.lineno + 1} lines)"
+            for node in ast.walk(tree)
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
+            and node.end_lineno - node.lineno + 1 > LIMIT]
+
+
+@pytest.mark.parametrize("path", sorted(PACKAGE.rglob("*.py")),
+                         ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_no_autograder_function_is_longer_than_80_lines(path):
+    assert not long_functions(path)
+
+
+def test_the_length_check_sees_a_long_function(tmp_path):
+    body = "\n".join(f"    x{i} = {i}" for i in range(LIMIT))
+    (tmp_path / "m.py").write_text(f"def f():\n{body}\n", encoding="utf-8")
+    assert long_functions(tmp_path / "m.py") == [f"m.py:1 f ({LIMIT + 1} lines)"]

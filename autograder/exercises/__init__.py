@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import importlib
 
-from .base import Case, Exercise, NotPlainData, close, describe, same_choice, to_plain
+from .base import (Case, Exercise, Mismatch, NotPlainData, close, describe, same_choice, to_plain,
+                   wrong_shape, wrong_value)
 
 NOTEBOOKS = (
     "q1_imaging",
@@ -56,6 +57,7 @@ def for_notebook(notebook: str) -> list[Exercise]:
 
 
 __all__ = [
-    "Case", "Exercise", "NotPlainData", "close", "describe", "same_choice", "to_plain",
+    "Case", "Exercise", "Mismatch", "NotPlainData", "close", "describe", "same_choice", "to_plain",
+    "wrong_shape", "wrong_value",
     "NOTEBOOKS", "REGISTRY", "get", "for_notebook",
 ]

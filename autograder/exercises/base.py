@@ -20,8 +20,35 @@ from typing import Any
 
 import numpy as np
 
-#: Why a received value did not match: ``None`` means it matched.
-Verdict = "str | None"
+from course_lib.answers import ChoiceFormatError, choice_letters
+
+
+@dataclass(frozen=True)
+class Mismatch:
+    """Why a received value does not match, as a comparison rule reports it.
+
+    A rule returns ``None`` when the answer matches. Otherwise it returns a ``Mismatch`` (built
+    with :func:`wrong_shape` or :func:`wrong_value`) or, as older rules do, a plain ``str``, which
+    counts as a wrong value. The grader classifies by ``kind``, never by the text.
+    """
+
+    #: "wrong-value", "wrong-shape" (wrong shape, type or number of values) or, for a choice
+    #: left blank, "unanswered"
+    kind: str
+    text: str
+
+    def __str__(self) -> str:
+        return self.text
+
+
+def wrong_shape(text: str) -> Mismatch:
+    """A rule's answer for a value of the wrong shape, type or number of items."""
+    return Mismatch("wrong-shape", text)
+
+
+def wrong_value(text: str) -> Mismatch:
+    """A rule's answer for a value of the right form but the wrong numbers."""
+    return Mismatch("wrong-value", text)
 
 
 @dataclass(frozen=True)
@@ -61,7 +88,7 @@ class Exercise:
     kind: str = "function"
     reference: Callable | None = None
     cases: Callable[[np.random.Generator], Iterable[Case]] | None = None
-    compare: Callable[[Any, Any], str | None] | None = None
+    compare: Callable[[Any, Any], Mismatch | str | None] | None = None
     answer: Any = None
     options: tuple = ()
     description: str = ""
@@ -124,7 +151,7 @@ def describe(value) -> str:
 # comparison rules: each returns None when `received` matches `expected`, else a reason
 
 
-def close(rtol: float = 1e-6, atol: float = 1e-9) -> Callable[[Any, Any], str | None]:
+def close(rtol: float = 1e-6, atol: float = 1e-9) -> Callable[[Any, Any], Mismatch | None]:
     """Element-wise ``np.allclose`` on arrays/floats, recursively through tuples.
 
     Shapes must match exactly (a ``(1, 3)`` answer for a ``(3,)`` question is a wrong shape), a
@@ -138,30 +165,33 @@ def close(rtol: float = 1e-6, atol: float = 1e-9) -> Callable[[Any, Any], str | 
     return rule
 
 
-def _close(expected, received, rtol, atol):
+def _close(expected, received, rtol, atol) -> Mismatch | None:
     if expected is None or isinstance(expected, (bool, str)):
-        if type(received) is not type(expected) or received != expected:
-            return f"wrong value (expected {expected!r}, got {_short(received)})"
+        if type(received) is not type(expected):
+            return wrong_shape(f"wrong type (expected {expected!r}, got {_short(received)})")
+        if received != expected:
+            return wrong_value(f"wrong value (expected {expected!r}, got {_short(received)})")
         return None
     if isinstance(expected, tuple):
         if not isinstance(received, tuple) or len(received) != len(expected):
-            return f"wrong type (expected a tuple of {len(expected)}, got {describe(received)})"
-        for i, (e, r) in enumerate(zip(expected, received)):
+            return wrong_shape(f"wrong type (expected a tuple of {len(expected)}, got "
+                               f"{describe(received)})")
+        for i, (e, r) in enumerate(zip(expected, received, strict=True)):
             why = _close(e, r, rtol, atol)
-            if why:
-                return f"item {i}: {why}"
+            if why is not None:
+                return Mismatch(why.kind, f"item {i}: {why.text}")
         return None
     if isinstance(received, (bool, str, tuple)) or received is None:
-        return f"wrong type (expected numbers, got {describe(received)})"
+        return wrong_shape(f"wrong type (expected numbers, got {describe(received)})")
     e = np.asarray(expected, dtype=float)
     r = np.asarray(received, dtype=float)
     if e.shape != r.shape:
-        return f"wrong shape (expected {e.shape}, got {r.shape})"
+        return wrong_shape(f"wrong shape (expected {e.shape}, got {r.shape})")
     if not np.all(np.isfinite(r) | ~np.isfinite(e)):
-        return "wrong value (NaN or inf in the answer)"
+        return wrong_value("wrong value (NaN or inf in the answer)")
     if not np.allclose(r, e, rtol=rtol, atol=atol, equal_nan=True):
         err = np.max(np.abs(r - e)) if e.size else 0.0
-        return f"wrong value (largest error {err:.3g})"
+        return wrong_value(f"wrong value (largest error {err:.3g})")
     return None
 
 
@@ -170,18 +200,22 @@ def _short(value) -> str:
     return text if len(text) <= 60 else describe(value)
 
 
-def same_choice(expected, received) -> str | None:
-    """Multiple choice: case- and space-insensitive option letters (a set for 'all that apply')."""
-    def norm(v):
-        if isinstance(v, str):
-            return frozenset(c for c in v.lower() if c.isalnum())
-        if isinstance(v, (tuple, frozenset, set)):
-            return frozenset(str(x).strip().lower() for x in v)
-        return None
-    got = norm(received)
-    if got is None:
-        return f"wrong type (expected option letters, got {describe(received)})"
-    return None if got == norm(expected) else "wrong answer"
+def choice_key(answer) -> str:
+    """A choice exercise's key as option letters (``"b"``, or ``"ac"`` for all that apply)."""
+    return answer if isinstance(answer, str) else "".join(sorted(answer))
+
+
+def same_choice(expected, received, options="abcd", name: str = "the answer") -> Mismatch | None:
+    """Multiple choice: ``received`` normalised by :func:`course_lib.answers.choice_letters`
+    (case, spaces and commas ignored) against the key. No answer at all is an ``unanswered``
+    mismatch, an answer of the wrong form a wrong shape, other letters a wrong value."""
+    key = choice_key(expected)
+    try:
+        got = choice_letters(received, "".join(options) or "abcd", name=name,
+                             single=isinstance(expected, str) and len(key) == 1)
+    except ChoiceFormatError as exc:
+        return Mismatch("unanswered" if exc.unanswered else "wrong-shape", str(exc))
+    return None if got == key else wrong_value("wrong answer")
 
 
 def isclose_scalar(a: float, b: float, rtol=1e-6, atol=1e-9) -> bool:

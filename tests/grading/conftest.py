@@ -23,7 +23,7 @@ def sources():
 @pytest.fixture(scope="session")
 def template_gradebook(tmp_path_factory, sources):
     """A gradebook that already knows every cell (nbgrader's SaveCells), copied per test."""
-    from autograder.gradebook import register_cells
+    from autograder.outputs.gradebook import register_cells
 
     folder = tmp_path_factory.mktemp("gradebook-template")
     db = folder / "gradebook.db"

@@ -13,7 +13,8 @@ source notebook and produce
 
 Everything the tests compare against is decided here, independently of the grader: the points
 come from the source notebook, the case counts from the registry with the grader's documented
-seed (:func:`autograder.grading.case_seed`).
+seed (:func:`autograder.grade.cases.case_seed` over the student, the name and the digest of the
+student's solution cell for it, :func:`autograder.grade.cases.solution_digest`).
 """
 
 from __future__ import annotations
@@ -30,7 +31,9 @@ from pathlib import Path
 import numpy as np
 
 from autograder.exercises import REGISTRY
-from autograder.grading import case_seed, load_source
+from autograder.grade.cases import case_seed, solution_digest
+from autograder.grade.planning import to_python
+from autograder.grade.sources import load_source
 
 REPO = Path(__file__).resolve().parents[2]
 #: Per-case time limit used by the grading tests (s): small, so hangs cost little.
@@ -147,12 +150,25 @@ def target_of(src) -> str:
     return function_names(src)[0]
 
 
-def cases_of(student: str, name: str, secret: bytes = SECRET):
-    """The cases the grader draws for ``student`` (the grader's documented seeding)."""
+def solution_code(nb: dict, name: str) -> str:
+    """The solution cell of ``name`` in notebook ``nb`` (the last one tagged with it), as the
+    grader runs it (magics turned into Python)."""
+    cells = [c for c in nb["cells"] if _meta(c).get("grade_id") == name and c["cell_type"] == "code"]
+    if not cells:
+        return ""
+    return to_python(_src_text(cells[-1]))[0] or ""
+
+
+def cases_of(student: str, name: str, nb, secret: bytes = SECRET):
+    """The cases the grader draws for ``student`` whose notebook is ``nb`` (a dict, or the path
+    of the submitted file) with the grader's documented seeding."""
     ex = REGISTRY[name]
     if ex.kind == "choice":
         return [None]
-    return ex.draw_cases(np.random.default_rng(case_seed(secret, student, name)))
+    if not isinstance(nb, dict):
+        nb = json.loads(Path(nb).read_text(encoding="utf-8"))
+    seed = case_seed(secret, student, name, solution_digest(solution_code(nb, name)))
+    return ex.draw_cases(np.random.default_rng(seed))
 
 
 def write_nb(path: Path, nb) -> None:

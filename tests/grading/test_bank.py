@@ -79,6 +79,7 @@ class Adversary:
     expect: Callable         # (src, ctx) -> {grade_id: (score or None, status)}
     all_notebooks: bool = True
     message: dict = field(default_factory=dict)   # grade_id template -> words the message has
+    applies: Callable = lambda src: True           # (src) -> whether the notebook can have it
 
 
 def _edit(fn):
@@ -227,12 +228,15 @@ for p in {paths!r}:
         print("LEAK read", p)
     except BaseException as exc:
         print("BLOCKED read", type(exc).__name__)
-for d in {[str(ctx.submitted), str(ctx.out), "/tmp", "/"]!r}:
+for d in {[str(ctx.submitted), str(ctx.out)]!r}:
     try:
         os.listdir(d)
         print("LEAK listdir", d)
     except BaseException as exc:
         print("BLOCKED listdir", type(exc).__name__)
+for p in {paths!r}:          # the sandbox's own / and /tmp may be listed: none of these is there
+    if os.path.lexists(p) and not p.startswith("/etc/"):
+        print("LEAK exists", p)
 try:
     with open({str(ctx.db)!r}, "ab") as fh:
         fh.write(b"garbage")
@@ -246,16 +250,16 @@ try:
     print("LEAK sqlite")
 except BaseException as exc:
     print("BLOCKED sqlite", type(exc).__name__)
-try:
+try:                        # a process may start inside the sandbox, but sees nothing more
     import subprocess
-    subprocess.run(["cat", {str(ctx.secret)!r}])
-    print("LEAK subprocess")
+    got = subprocess.run(["cat", {str(ctx.secret)!r}], capture_output=True).stdout
+    print("LEAK subprocess" if got.strip() else "BLOCKED subprocess (nothing read)")
 except BaseException as exc:
     print("BLOCKED subprocess", type(exc).__name__)
-try:
-    import inspect, course_lib
-    inspect.getsource(course_lib)
-    print("LEAK source")
+try:                        # only the data tables of course_lib exist there: no code
+    import inspect, course_lib, course_lib.marching_cubes as tables
+    text = inspect.getsource(course_lib) + inspect.getsource(tables)
+    print("LEAK source" if "def " in text else "BLOCKED source (tables only)")
 except BaseException as exc:
     print("BLOCKED source", type(exc).__name__)
 """
@@ -339,7 +343,7 @@ def _old_format(src, ctx):
 
 def _partial_expect(src, ctx):
     name = target_of(src)
-    cases = cases_of(ctx.student, name)
+    cases = cases_of(ctx.student, name, _submitted_nb(ctx, src))
     raising = sum(c.raises is not None and issubclass(ValueError, c.raises) for c in cases)
     exp = expect_full_marks(src)
     status = "ok" if raising == len(cases) else "error"
@@ -351,7 +355,7 @@ def _crash_expect(src, ctx):
     """Every third call in a process is killed; the grader restarts the child (three processes
     at most) from the case after the crash, so with cases 0..n-1 the passes are 0,1 | 3,4 | 6,7."""
     name = target_of(src)
-    n = len(cases_of(ctx.student, name))
+    n = len(cases_of(ctx.student, name, _submitted_nb(ctx, src)))
     passed = sum(1 for i in range(n) if i < 9 and i % 3 != 2)
     exp = expect_full_marks(src)
     exp[f"test_{name}"] = (points_of(src, name) * passed / n, "error" if passed < n else "ok")
@@ -362,55 +366,82 @@ def _tamper_expect(src, ctx):
     return expect_full_marks(src)
 
 
-def _choice_of(src) -> str:
-    """The first multiple-choice item of a notebook (every question notebook has one)."""
-    return next(name for name, _, _ in src.graded
-                if name in REGISTRY and REGISTRY[name].kind == "choice")
-
-
-def _set_choice(source: str | None):
-    """Set the notebook's first choice cell to ``source`` (None: delete the cell)."""
-    def edit(nb, src, ctx):
-        i = cell_index(nb, _choice_of(src))
-        if source is None:
-            del nb["cells"][i]
-        else:
-            nb["cells"][i]["source"] = source.replace("NAME", _choice_of(src))
-    return _edit(edit)
-
-
-def _with_choice(status, score=0.0):
-    def expect(src, ctx):
-        exp = expect_full_marks(src)
-        exp[f"test_{_choice_of(src)}"] = (score, status)
-        return exp
-    return expect
-
-
-def _set_target(source: str):
-    """Replace the target function's whole cell (``NAME`` stands for its name)."""
-    return _edit(lambda nb, src, ctx: set_cell(nb, target_of(src),
-                                               source.replace("NAME", target_of(src))))
-
-
-def _untouched_target(nb, src, ctx):
-    """The target's cell exactly as released: signature, docstring and the stub."""
-    released = release_version(src)
-    stub = released["cells"][cell_index(released, target_of(src))]["source"]
-    set_cell(nb, target_of(src), stub)
-
-
-def _blank_expect(src, ctx):
-    exp = {f"test_{name}": (0.0, "unanswered") for name, _, _ in src.graded}
-    exp.update({gid: (None, "manual") for gid, _ in src.manual})
-    return exp
-
-
 def _strip_expect(src, ctx):
     exp = expect_full_marks(src)
     exp.update({gid: (0.0, "missing") for gid, _ in src.manual})
     return exp
 
+
+# --------------------------------------------------------------------------------------------
+# issue 9: no answer, or an answer of the wrong form, is the student's status, never the grader's
+
+
+def _choice_of(src) -> str | None:
+    return next((n for n, _, _ in src.graded
+                 if n in REGISTRY and REGISTRY[n].kind == "choice"), None)
+
+
+def _set_answer(which, source):
+    """An edit setting the solution cell of the target function (``which="function"``) or of
+    the notebook's first choice item to ``source`` (None deletes the cell; "RELEASE" restores
+    the released stub); ``{name}`` in ``source`` is the item's name."""
+    def edit(nb, src, ctx):
+        name = target_of(src) if which == "function" else _choice_of(src)
+        if source is None:
+            del nb["cells"][cell_index(nb, name)]
+        elif source == "RELEASE":
+            stub = release_version(src)
+            set_cell(nb, name, stub["cells"][cell_index(stub, name)]["source"])
+        else:
+            set_cell(nb, name, source.format(name=name))
+    return _edit(edit)
+
+
+def _answer_expect(which, status):
+    def expect(src, ctx):
+        exp = expect_full_marks(src)
+        name = target_of(src) if which == "function" else _choice_of(src)
+        exp[f"test_{name}"] = (0.0, status)
+        return exp
+    return expect
+
+
+def _no_answer(which, source, status, words=None):
+    return Adversary(_set_answer(which, source), _answer_expect(which, status),
+                     message={"answer": words} if words else {},
+                     applies=(lambda src: True) if which == "function"
+                     else (lambda src: _choice_of(src) is not None))
+
+
+def _release_expect(src, ctx):
+    exp = {tid: (0.0, "unanswered") for _, tid, _ in src.graded}
+    exp.update({gid: (None, "manual") for gid, _ in src.manual})
+    return exp
+
+
+ISSUE_9: dict[str, Adversary] = {
+    "adv_fn_untouched": _no_answer("function", "RELEASE", "unanswered", "stub"),
+    "adv_fn_emptied": _no_answer("function", "", "unanswered", "no code"),
+    "adv_fn_comments": _no_answer("function", "# I will do this later\n", "unanswered",
+                                  "no code"),
+    "adv_fn_none": _no_answer("function", "{name} = None\n", "unanswered", "None"),
+    "adv_fn_number": _no_answer("function", "{name} = 3.5\n", "failed", "must be a function"),
+    "adv_fn_list": _no_answer("function", "{name} = [1, 2, 3]\n", "failed", "a list"),
+    "adv_fn_arity": _no_answer("function", "def {name}(a, b, c, d, e, f, g, h, i, j, k, l, m, "
+                               "n):\n    return 0.0\n", "failed", "signature"),
+    "adv_choice_untouched": _no_answer("choice", "RELEASE", "unanswered", "stub"),
+    "adv_choice_emptied": _no_answer("choice", "", "unanswered", "no code"),
+    "adv_choice_deleted": _no_answer("choice", None, "missing", "deleted"),
+    "adv_choice_none": _no_answer("choice", "{name} = None\n", "unanswered", "None"),
+    "adv_choice_blank": _no_answer("choice", "{name} = ' '\n", "unanswered", "no answer"),
+    "adv_choice_spaces": _no_answer("choice", "{name} = ' , '\n", "unanswered", "no answer"),
+    "adv_choice_bad_letters": _no_answer("choice", "{name} = '(b)'\n", "failed",
+                                         "may hold only the letters"),
+    "adv_choice_number": _no_answer("choice", "{name} = 2\n", "failed", "string of option"),
+    "adv_choice_list": _no_answer("choice", "{name} = ['a']\n", "failed", "string of option"),
+    "adv_release": Adversary(lambda src, ctx: {f"{src.name}.ipynb": release_version(src)},
+                             _release_expect),
+}
 
 ADVERSARIES: dict[str, Adversary] = {
     # the grade is decided outside the student's process
@@ -448,34 +479,6 @@ ADVERSARIES: dict[str, Adversary] = {
     "adv_warnings": Adversary(_target_code(WARNINGS), lambda src, ctx: expect_full_marks(src)),
     "adv_widgets": Adversary(_edit(_widgets), lambda src, ctx: expect_full_marks(src)),
     "adv_huge_output": Adversary(_edit(_huge_output), lambda src, ctx: expect_full_marks(src)),
-    # no answer, or an answer of the wrong kind: always the student's status, never the grader's
-    "adv_blank_release": Adversary(lambda src, ctx: {f"{src.name}.ipynb": release_version(src)},
-                                   _blank_expect),
-    "adv_choice_none": Adversary(_set_choice("NAME = None\n"), _with_choice("unanswered"),
-                                 message={"choice": "no answer given"}),
-    "adv_choice_empty": Adversary(_set_choice(""), _with_choice("unanswered"),
-                                  message={"choice": "no answer given"}),
-    "adv_choice_spaces": Adversary(_set_choice("NAME = ' , '\n"), _with_choice("unanswered"),
-                                   message={"choice": "no answer given"}),
-    "adv_choice_number": Adversary(_set_choice("NAME = 3\n"), _with_choice("failed"),
-                                   message={"choice": "not int"}),
-    "adv_choice_list": Adversary(_set_choice("NAME = ['a']\n"), _with_choice("failed"),
-                                 message={"choice": "must be a string of option letters"}),
-    "adv_choice_bad_letters": Adversary(_set_choice("NAME = '(b)'\n"), _with_choice("failed"),
-                                        message={"choice": "may hold only the letters"}),
-    "adv_choice_deleted": Adversary(_set_choice(None), _with_choice("missing")),
-    "adv_func_untouched": Adversary(_edit(_untouched_target), _with_target("unanswered"),
-                                    message={"target": "not attempted"}),
-    "adv_func_emptied": Adversary(_set_target(""), _with_target("unanswered"),
-                                  message={"target": "not attempted"}),
-    "adv_func_none": Adversary(_set_target("NAME = None\n"), _with_target("error"),
-                               message={"target": "not callable"}),
-    "adv_func_number": Adversary(_set_target("NAME = 3\n"), _with_target("error"),
-                                 message={"target": "not callable"}),
-    "adv_func_list": Adversary(_set_target("NAME = [1.0, 2.0]\n"), _with_target("error"),
-                               message={"target": "not callable"}),
-    "adv_func_arity": Adversary(_set_target("def NAME():\n    return 0.0\n"),
-                                _with_target("error"), message={"target": "TypeError"}),
     # files that cannot be graded
     "adv_invalid_json": Adversary(
         lambda src, ctx: {f"{src.name}.ipynb": json.dumps(model_version(src))[:-200]},
@@ -490,10 +493,15 @@ ADVERSARIES: dict[str, Adversary] = {
     "adv_oversize": Adversary(
         lambda src, ctx: {f"{src.name}.ipynb": b"{" + b" " * (26 * 2**20) + b"}"},
         lambda src, ctx: expect_all(src, "unreadable"), all_notebooks=False),
+    **ISSUE_9,
 }
 
 PAIRS = [(adv, nb) for adv, a in ADVERSARIES.items()
-         for k, nb in enumerate(SOURCES) if a.all_notebooks or k == 0]
+         for k, nb in enumerate(SOURCES) if (a.all_notebooks or k == 0) and a.applies(SOURCES[nb])]
+
+
+def _submitted_nb(ctx: Ctx, src) -> Path:
+    return ctx.submitted / ctx.student / "tripos2006" / f"{src.name}.ipynb"
 
 
 def _ctx(root: Path, student: str) -> Ctx:
@@ -602,31 +610,36 @@ def test_bank_case(bank, adv, notebook):
         assert words["target"] in rows[f"test_{target_of(src)}"]["message"]
     if "all" in words:
         assert all(words["all"] in r["message"] for r in rows.values())
-    if "choice" in words:
-        assert words["choice"] in rows[f"test_{_choice_of(src)}"]["message"]
+    if "answer" in words:
+        name = target_of(src) if adv.startswith("adv_fn") else _choice_of(src)
+        assert words["answer"] in rows[f"test_{name}"]["message"]
     assert not [gid for gid, r in rows.items() if r["status"] == "grader-error"
                 or "grader failed" in r["message"]], "never blame the grader for a submission"
 
 
-def test_no_bank_submission_is_blamed_on_the_grader(bank):
-    """Whatever a submission does, the grader itself never fails on it (issue 9)."""
-    blamed = {key: r["message"][:200] for key, r in bank["rows"].items()
-              if r["status"] == "grader-error" or "grader failed" in r["message"]}
-    assert not blamed
+def test_no_bank_submission_is_a_grader_error(bank):
+    """Whatever a submission does, it gets a student-facing status (issue 9)."""
+    bad = {k: (r["status"], r["message"][:200]) for k, r in bank["rows"].items()
+           if r["status"] == "grader-error" or "grader failed" in r["message"]}
+    assert not bad
+
+
+def test_unanswered_items_are_not_grader_failures_in_the_report(bank):
+    page = (bank["root"] / "out" / "report.html").read_text(encoding="utf-8")
+    table = page.split("Most-failed tests", 1)[1].split("</table>", 1)[0]
+    assert "grader-error" not in table
+    assert "unanswered" in table
+    assert "Grader errors (0)" in page
 
 
 def test_blank_release_is_unanswered_not_failed(bank):
     """The untouched release: every auto-graded item 'unanswered', with what to do about it."""
     for nb_name, src in SOURCES.items():
         rows = {gid: r for (s, nb, gid), r in bank["rows"].items()
-                if s == f"adv_blank_release-{nb_name}" and nb == nb_name}
-        for name, tid, _ in src.graded:
+                if s == f"adv_release-{nb_name}" and nb == nb_name}
+        for _name, tid, _ in src.graded:
             assert rows[tid]["status"] == "unanswered"
-            kind = REGISTRY[name].kind
-            want = "string of option letters" if kind == "choice" else "not attempted"
-            assert want in rows[tid]["message"], rows[tid]["message"]
-    page = (bank["root"] / "out" / "report.html").read_text(encoding="utf-8")
-    assert "Grader errors (0)" in page
+            assert "released stub" in rows[tid]["message"], rows[tid]["message"]
 
 
 def test_other_notebooks_of_a_student_are_missing(bank):
@@ -683,14 +696,15 @@ def test_hidden_cases_show_only_counts_without_reveal(bank):
     for nb_name, src in SOURCES.items():
         name = target_of(src)
         page = _feedback(bank, f"adv_edit_tests-{nb_name}", nb_name)
-        hidden = [c for c in cases_of(f"adv_edit_tests-{nb_name}", name) if not c.visible]
+        student = f"adv_edit_tests-{nb_name}"
+        cases = cases_of(student, name, _submitted_nb(_ctx(bank["root"], student), src))
+        hidden = [c for c in cases if not c.visible]
         if not hidden:
             continue
         assert f"Hidden cases: 0 of {len(hidden)} passed" in page
         assert "failing hidden case" not in page
         for case in hidden:   # no hidden label appears unless a visible case shares it
-            visible_labels = {c.label for c in cases_of(f"adv_edit_tests-{nb_name}", name)
-                              if c.visible}
+            visible_labels = {c.label for c in cases if c.visible}
             if case.label not in visible_labels and len(case.label) > 12:
                 assert html.escape(case.label) not in page
 

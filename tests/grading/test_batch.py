@@ -94,8 +94,10 @@ def batch(tmp_path_factory, sources, template_gradebook):
     db_url = f"sqlite:///{out / 'gradebook.db'}"
     run_grade(root / "submitted", out, "--db-url", db_url, secret_file=root / "secret")
     first = (out / "grades.csv").read_text()
+    pages = {p.relative_to(out): p.read_bytes()
+             for p in [out / "report.html", *sorted((out / "feedback").rglob("*.html"))]}
     return {"root": root, "out": out, "expected": expected, "db_url": db_url,
-            "rows": read_grades(out), "first_csv": first}
+            "rows": read_grades(out), "first_csv": first, "pages": pages}
 
 
 def test_scores_are_exactly_as_built(batch):
@@ -144,13 +146,16 @@ def test_gradebook_matches_the_csv(batch):
 
 
 def test_regrading_gives_the_same_scores(batch):
-    """Same folder, same secret: the same hidden cases, the same CSV, the gradebook unchanged."""
+    """Same folder, same secret: the same hidden cases, byte for byte the same CSV, feedback
+    and report, the gradebook unchanged."""
     con = sqlite3.connect(batch["db_url"][len("sqlite:///"):])
     before = con.execute("SELECT COUNT(*) FROM grade").fetchone()[0]
     con.close()
     run_grade(batch["root"] / "submitted", batch["out"], "--db-url", batch["db_url"],
               secret_file=batch["root"] / "secret")
     assert (batch["out"] / "grades.csv").read_text() == batch["first_csv"]
+    for rel, data in batch["pages"].items():
+        assert (batch["out"] / rel).read_bytes() == data, rel
     con = sqlite3.connect(batch["db_url"][len("sqlite:///"):])
     after = con.execute("SELECT COUNT(*) FROM grade").fetchone()[0]
     con.close()

@@ -32,7 +32,8 @@ import sys
 import warnings
 from pathlib import Path
 
-from .grading import ASSIGNMENT, Batch, CellResult, SourceNotebook, Submission
+from ..course import default_db_url
+from ..model import ASSIGNMENT, Batch, CellKind, CellResult, SourceNotebook, Status, Submission
 
 COURSE_ID = "4f9"
 _HIDDEN = re.compile(r"^[ \t]*###\s*BEGIN HIDDEN TESTS.*?^[ \t]*###\s*END HIDDEN TESTS[^\n]*\n?",
@@ -47,10 +48,6 @@ def course_root(submitted: Path, out: Path) -> Path:
     if submitted.name == "submitted" and (submitted.parent / "source" / ASSIGNMENT).is_dir():
         return submitted.parent
     return Path(out).resolve()
-
-
-def default_db_url(root: Path) -> str:
-    return f"sqlite:///{Path(root).resolve() / 'gradebook.db'}"
 
 
 def strip_hidden(source: str) -> str:
@@ -84,7 +81,7 @@ def ensure_course(root: Path, db_url: str, sources: list[SourceNotebook]) -> Non
     if gradebook_knows(db_url, sources):
         return
     try:
-        from .course import prepare_course
+        from ..course import prepare_course
 
         prepare_course(root, db_url=db_url, notebooks=[s.path for s in sources])
     except Exception as exc:  # noqa: BLE001 - e.g. a source notebook nbgrader cannot release
@@ -148,9 +145,9 @@ def sync(batch: Batch, sources: list[SourceNotebook], submitted: Path, out: Path
                 grade = grades.get((r.notebook, r.grade_id))
                 if grade is None:
                     continue
-                if r.kind == "manual":
-                    grade.auto_score = None if r.status == "manual" else 0.0
-                    grade.needs_manual_grade = (r.status == "manual"
+                if r.kind is CellKind.MANUAL:
+                    grade.auto_score = None if r.status is Status.MANUAL else 0.0
+                    grade.needs_manual_grade = (r.status is Status.MANUAL
                                                 or grade.manual_score is not None)
                 else:
                     grade.auto_score = float(r.score or 0.0)
@@ -220,14 +217,14 @@ def _clean(cell: dict) -> dict:
 
 def _verdict_output(r: CellResult) -> dict:
     score = "-" if r.score is None else f"{r.score:g}"
-    text = f"autograder: {score} / {r.max_score:g} [{r.status}] {r.message}\n"
+    text = f"autograder: {score} / {r.max_score:g} [{r.status.value}] {r.message}\n"
     return {"output_type": "stream", "name": "stdout", "text": text}
 
 
 def autograded_notebook(src: SourceNotebook, sub: Submission,
                         results: dict[str, CellResult]) -> dict:
     """The notebook formgrader shows for one submission (see the module docstring)."""
-    if sub.status != "ok" or sub.nb is None:
+    if sub.status is not Status.OK or sub.nb is None:
         cells = [{"cell_type": "markdown", "metadata": {},
                   "source": f"**Not graded automatically:** {sub.message}"}]
         for c in src.nb["cells"]:
@@ -244,7 +241,7 @@ def autograded_notebook(src: SourceNotebook, sub: Submission,
     seen_ids: set[str] = set()
     for k, c in enumerate(cells):
         gid = (c.get("metadata", {}).get("nbgrader") or {}).get("grade_id")
-        if gid in results and c.get("cell_type") == "code" and results[gid].kind != "manual":
+        if gid in results and c.get("cell_type") == "code" and results[gid].kind is not CellKind.MANUAL:
             c["outputs"] = [_verdict_output(results[gid])]
         # nbformat 4.5 wants a unique id per cell: the grade_id where there is one
         cid = re.sub(r"[^A-Za-z0-9_-]", "-", gid)[:64] if gid else f"cell-{k}"
@@ -257,10 +254,7 @@ def autograded_notebook(src: SourceNotebook, sub: Submission,
 
 
 def _merge(src: SourceNotebook, sub: Submission) -> list[dict]:
-    from .grading import plan_cells
-
-    plan = plan_cells(src, sub)
-    by_name = {k: name for name, k in plan.chosen.items() if plan.found.get(name) == "by-name"}
+    by_name = {k: name for name, k in sub.found_by_name.items()}
     last: dict[str, int] = {}
     for k, c in enumerate(sub.cells):
         if c["grade_id"]:

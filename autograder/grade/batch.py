@@ -1,0 +1,250 @@
+"""The batch: one isolated job per (student, notebook), judged as soon as it returns.
+
+For every student and source notebook :func:`grade_batch` reads the submission, plans its cells,
+and (for the graded names it has) builds one :class:`NotebookJob` whose cases are drawn per
+student (:mod:`.cases`). A pool of ``--jobs`` threads hands the jobs to the sandbox; each
+returned :class:`~autograder.model.NameRun` is judged at once (:mod:`autograder.judging`) and
+only what the outputs need is kept: verdicts, reasons, small values or summaries of big ones,
+and hidden cases' details only when they are to be revealed. So the grader's memory does not
+grow with what students return, whatever the batch's size.
+"""
+
+from __future__ import annotations
+
+import sys
+import traceback
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .. import judging
+from ..exercises import REGISTRY
+from ..isolation import CaseInput, Limits, Mode, NameJob, NotebookJob, run_notebook
+from ..model import (ASSIGNMENT, AnswerHint, Batch, CaseRecord, CellKind, CellResult, NameRun,
+                     SourceNotebook, Status, Submission, Verdict)
+from .cases import DrawnCase, case_seed, draw, solution_digest
+from .planning import CellPlan, answer_hint, plan_cells
+from .progress import Progress
+from .reading import MAX_NOTEBOOK_MB, discover_students, read_submission
+
+#: Characters of printed output kept per graded cell for its feedback.
+PRINTED_CAP = 20_000
+
+
+@dataclass
+class Options:
+    """How a batch is graded (the command line's choices)."""
+
+    out: Path
+    jobs: int = 1
+    limits: Limits = field(default_factory=Limits)
+    secret: bytes = b""
+    reveal_hidden: bool = False
+    mode: Mode = Mode.ISOLATED
+    max_notebook_mb: float = MAX_NOTEBOOK_MB
+    progress: bool = True
+
+
+@dataclass
+class NotebookWork:
+    """One student's notebook, read and planned, with the graded names to run."""
+
+    student: str
+    src: SourceNotebook
+    sub: Submission
+    plan: CellPlan
+    names: list[tuple[str, str, float]]     #: (name, test grade_id, points)
+
+
+def grade_batch(submitted: Path, sources: list[SourceNotebook], opts: Options,
+                students: list[str] | None = None) -> Batch:
+    """Grade every student's notebooks: one :class:`CellResult` per graded cell."""
+    submitted = Path(submitted)
+    students = discover_students(submitted) if students is None else students
+    results: list[CellResult] = []
+    works: list[NotebookWork] = []
+    subs: dict[tuple[str, str], Submission] = {}
+    for student in students:
+        for src in sources:
+            sub = read_submission(submitted / student / ASSIGNMENT, student, src.name,
+                                  opts.max_notebook_mb)
+            subs[(student, src.name)] = sub
+            work = _prepare(student, src, sub, results)
+            if work is not None:
+                works.append(work)
+    results.extend(_run_all(works, opts))
+    order = {s.name: i for i, s in enumerate(sources)}
+    cell_order = {(s.name, c.meta.get("grade_id")): i for s in sources
+                  for i, c in enumerate(s.cells)}
+    results.sort(key=lambda r: (r.student, order.get(r.notebook, 99),
+                                cell_order.get((r.notebook, r.grade_id), 999)))
+    return Batch(results, subs, list(students))
+
+
+def _prepare(student: str, src: SourceNotebook, sub: Submission,
+             results: list[CellResult]) -> NotebookWork | None:
+    """Rows that need no sandbox go to ``results``; the rest becomes a :class:`NotebookWork`."""
+    if sub.status is not Status.OK:
+        for name, test_id, points in src.graded:
+            results.append(CellResult(student, src.name, test_id, name, 0.0, points, sub.status,
+                                      sub.message, kind=_kind(name), whole_notebook=True))
+        for gid, points in src.manual:
+            results.append(CellResult(student, src.name, gid, gid, 0.0, points, sub.status,
+                                      sub.message, kind=CellKind.MANUAL, whole_notebook=True))
+        return None
+    plan = plan_cells(src, sub)
+    sub.found_by_name = dict(plan.by_name)
+    names = []
+    for name, test_id, points in src.graded:
+        if name not in REGISTRY:
+            results.append(CellResult(
+                student, src.name, test_id, name, 0.0, points, Status.GRADER_ERROR,
+                f"the autograder has no rule for {test_id} (instructor: register {name!r} in "
+                "autograder/exercises)"))
+        elif name in plan.missing:
+            results.append(CellResult(
+                student, src.name, test_id, name, 0.0, points, Status.MISSING,
+                f"no solution cell for {name}: the cell (grade_id {name!r}) was deleted and no "
+                "other cell defines it; copy it back from the released notebook, answer it and "
+                "resubmit", kind=_kind(name)))
+        else:
+            names.append((name, test_id, points))
+    results.extend(_manual_rows(student, src, sub))
+    return NotebookWork(student, src, sub, plan, names) if names else None
+
+
+def _kind(name: str) -> CellKind:
+    ex = REGISTRY.get(name)
+    return CellKind(ex.kind) if ex is not None else CellKind.FUNCTION
+
+
+def _manual_rows(student: str, src: SourceNotebook, sub: Submission) -> list[CellResult]:
+    rows = []
+    for gid, points in src.manual:
+        answer = [c["source"] for c in sub.cells if c["grade_id"] == gid]
+        rows.append(CellResult(
+            student, src.name, gid, gid, None if answer else 0.0, points,
+            Status.MANUAL if answer else Status.MISSING,
+            "marked by hand in formgrader" if answer else
+            f"the answer cell {gid} is missing from the notebook", kind=CellKind.MANUAL,
+            code=answer[-1] if answer else ""))
+    return rows
+
+
+def _run_all(works: list[NotebookWork], opts: Options) -> list[CellResult]:
+    """Grade the notebooks on a pool of ``opts.jobs`` threads (each waits on its sandbox)."""
+    progress = Progress(len(works), enabled=opts.progress and bool(works))
+    results: list[CellResult] = []
+    try:
+        with ThreadPoolExecutor(max_workers=max(1, opts.jobs)) as pool:
+            futures = [pool.submit(grade_notebook, w, opts) for w in works]
+            for fut in as_completed(futures):
+                results.extend(fut.result())
+                progress.update()
+    finally:
+        progress.close()
+    return results
+
+
+def grade_notebook(work: NotebookWork, opts: Options) -> list[CellResult]:
+    """Run one notebook's job and judge every graded name; never raises."""
+    try:
+        prepared = {name: _prepare_name(work, name, opts) for name, _, _ in work.names}
+        job = NotebookJob(f"{work.student}--{work.src.name}", work.src.setup_source,
+                          [p[0] for p in prepared.values()])
+        runs = run_notebook(job, opts.limits, opts.mode)
+        return [judge_name(work, name, test_id, points, prepared[name][1], prepared[name][2],
+                           runs.get(name), opts.reveal_hidden)
+                for name, test_id, points in work.names]
+    except Exception as exc:  # noqa: BLE001 - one broken notebook never stops the batch
+        traceback.print_exc()
+        print(f"error: the grader failed on {work.student}/{work.src.name}", file=sys.stderr)
+        return [CellResult(work.student, work.src.name, test_id, name, 0.0, points,
+                           Status.GRADER_ERROR, f"the grader failed on this test "
+                           f"({type(exc).__name__}); the instructor will look into it",
+                           kind=_kind(name))
+                for name, test_id, points in work.names]
+
+
+def _prepare_name(work: NotebookWork, name: str,
+                  opts: Options) -> tuple[NameJob, list[DrawnCase], AnswerHint]:
+    ex = REGISTRY[name]
+    code = work.plan.python.get(work.plan.chosen[name], "")
+    kind = CellKind(ex.kind)
+    if kind is CellKind.CHOICE:
+        drawn = []
+        inputs = [CaseInput((), {}, 2**16)]
+    else:
+        seed = case_seed(opts.secret, work.student, name, solution_digest(code))
+        drawn = draw(ex, seed)
+        inputs = [CaseInput(tuple(d.case.args), dict(d.case.kwargs), d.result_cap)
+                  for d in drawn]
+    calls = [(tuple(d.case.args), dict(d.case.kwargs)) for d in drawn[:50]]
+    hint = answer_hint(code, name, kind, calls)
+    return NameJob(name, ex.kind, list(work.plan.cells), inputs), drawn, hint
+
+
+def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
+               drawn: list[DrawnCase], hint: AnswerHint, run: NameRun | None,
+               reveal: bool) -> CellResult:
+    """The :class:`CellResult` of one graded name from what its run returned."""
+    ex = REGISTRY[name]
+    kind = CellKind(ex.kind)
+    code = work.sub.cells[work.plan.chosen[name]]["source"]
+    if run is None:
+        return CellResult(work.student, work.src.name, test_id, name, 0.0, points,
+                          Status.GRADER_ERROR, "the sandbox returned nothing for this test; "
+                          "the instructor will look into it", kind=kind, code=code)
+    records = _records(ex, kind, drawn, run)
+    score, status, message = judging.summarise(records, points, kind)
+    if hint.reference and kind is CellKind.FUNCTION:
+        score, status, message = 0.0, *judging.reference_imported(name, hint.reference)
+    elif score == 0 and status is not Status.REFERENCE_USED:
+        why = "; ".join(judging.clip(n, 200) for n in run.load_notes[-3:])
+        override = judging.unanswered_or_broken(name, kind, hint, run.defined, why)
+        if override is not None:
+            status, message = override
+    notes = list(work.plan.notes.get(name, []))
+    if notes:
+        message += ". Note: " + "; ".join(notes)
+    printed = _printed(run, records, reveal)
+    return CellResult(work.student, work.src.name, test_id, name, score, points, status,
+                      message, kind=kind, cases=[_kept(r, reveal) for r in records],
+                      printed=printed, notes=notes + list(run.load_notes),
+                      seconds=run.seconds, code=code)
+
+
+def _records(ex, kind: CellKind, drawn: list[DrawnCase], run: NameRun) -> list[CaseRecord]:
+    if kind is CellKind.CHOICE:
+        verdict, reason = judging.judge_choice(ex, run.outcomes[0])
+        return [CaseRecord(0, "your answer", True, verdict, reason)]
+    records = []
+    for i, (d, outcome) in enumerate(zip(drawn, run.outcomes, strict=True)):
+        verdict, reason = judging.judge_case(ex, d.case, d.expected, outcome)
+        received = outcome.value if verdict in (Verdict.PASS, Verdict.WRONG_VALUE,
+                                                Verdict.WRONG_SHAPE) else None
+        records.append(CaseRecord(
+            i, d.case.label, bool(d.case.visible), verdict, reason, args=tuple(d.case.args),
+            kwargs=dict(d.case.kwargs), expected=d.expected, received=received,
+            raises=d.case.raises.__name__ if d.case.raises else "", printed=outcome.printed))
+    return records
+
+
+def _kept(r: CaseRecord, reveal: bool) -> CaseRecord:
+    """What the outputs keep of a record: hidden details only when revealed, big values summarised."""
+    if not r.visible and not (reveal and r.verdict is not Verdict.PASS):
+        return CaseRecord(r.index, "", False, r.verdict)
+    keep = judging.keep
+    return CaseRecord(r.index, r.label, r.visible, r.verdict, r.reason,
+                      args=keep(tuple(r.args)), kwargs={k: keep(v) for k, v in r.kwargs.items()},
+                      expected=keep(r.expected), received=keep(r.received), raises=r.raises,
+                      printed=judging.clip_block(r.printed, 2000))
+
+
+def _printed(run: NameRun, records: list[CaseRecord], reveal: bool) -> str:
+    """The solution cells' output, then what the visible (and, revealed, hidden) cases printed."""
+    parts = [run.printed] if run.printed.strip() else []
+    for r in records:
+        if r.printed.strip() and (r.visible or reveal):
+            parts.append(f"--- while running {r.label or f'case {r.index + 1}'} ---\n{r.printed}")
+    return judging.clip_block("\n".join(parts), PRINTED_CAP)

@@ -1,0 +1,82 @@
+"""The cases each student's graded names are run on, and what the sandbox may send back.
+
+Hidden cases come from a generator seeded with HMAC-SHA256 of the course secret over the
+assignment, the student, the graded name and a digest of the student's *normalised* solution
+source for that name (:func:`solution_digest`: its syntax tree, so comments and spacing do not
+count). Re-grading the same submission draws the same cases (same CSV, feedback, report);
+re-grading a *changed* function draws new ones, so a table of hidden inputs printed on one run
+gains nothing on the next (issue 10).
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import hmac
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exercises.base import Case, Exercise
+from ..model import ASSIGNMENT
+
+#: Bytes every case may return beyond four times its expected answer's size.
+RESULT_SLACK = 16 * 2**10
+
+
+def solution_digest(code: str) -> str:
+    """SHA-256 of a solution's syntax tree (its text, spaces collapsed, if it does not parse)."""
+    try:
+        text = ast.dump(ast.parse(code), annotate_fields=False)
+    except (SyntaxError, ValueError):
+        text = " ".join(code.split())
+    return hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
+
+
+def case_seed(secret: bytes, student: str, name: str, digest: str = "") -> int:
+    """The seed of a student's hidden cases for ``name`` (see the module docstring)."""
+    message = f"{ASSIGNMENT}\0{student}\0{name}\0{digest}".encode()
+    return int.from_bytes(hmac.new(secret, message, hashlib.sha256).digest()[:16], "big")
+
+
+@dataclass
+class DrawnCase:
+    """One case with the reference's answer (None where the case must raise)."""
+
+    case: Case
+    expected: object
+    result_cap: int
+
+
+def draw(ex: Exercise, seed: int) -> list[DrawnCase]:
+    """The exercise's cases from ``seed`` with their expected answers; a case whose reference
+    fails (a registry problem) is skipped with a warning."""
+    drawn = []
+    for case in ex.draw_cases(np.random.default_rng(seed)):
+        expected = None
+        if case.raises is None:
+            try:
+                expected = ex.expected(case)
+            except Exception as exc:  # noqa: BLE001 - a registry problem: skip the case
+                print(f"warning: reference of {ex.name} failed on case {case.label!r}: {exc}; "
+                      "case skipped", file=sys.stderr)
+                continue
+        drawn.append(DrawnCase(case, expected, result_cap(expected)))
+    return drawn
+
+
+def result_cap(expected) -> int:
+    """Bytes the encoded result of a case may take: 4 × the expected answer's size + 16 KiB."""
+    return 4 * encoded_size(expected) + RESULT_SLACK
+
+
+def encoded_size(value) -> int:
+    """An estimate of the bytes ``value`` takes once encoded (arrays by their data)."""
+    if isinstance(value, np.ndarray):
+        return int(value.nbytes) + 128
+    if isinstance(value, (tuple, list)):
+        return 16 + sum(encoded_size(v) for v in value)
+    if isinstance(value, str):
+        return len(value.encode("utf-8", "surrogatepass")) + 8
+    return 32

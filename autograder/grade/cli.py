@@ -1,0 +1,133 @@
+"""``python -m autograder grade``: the command line.
+
+    python -m autograder grade SUBMITTED --out OUT [--jobs N] [--timeout S] [--db-url URL]
+                                                   [--reveal-hidden] [--secret-file F]
+                                                   [--unsafe-no-isolation]
+
+``SUBMITTED`` has nbgrader's layout, ``SUBMITTED/<student>/tripos2006/<notebook>.ipynb``. The
+grader refuses to run when the operating-system sandbox is unavailable (exit status 2, with
+why) unless ``--unsafe-no-isolation`` is given, which it announces loudly. Writes
+``OUT/grades.csv``, ``OUT/feedback/<student>/<notebook>.html``, ``OUT/report.html`` and keeps
+nbgrader's gradebook and ``autograded/`` notebooks in step. Exit status 0 whenever the batch was
+graded, whatever the submissions did; 2 for a usage error (no such folder, no source notebooks,
+unreadable secret, no sandbox).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import sys
+import time
+import traceback
+from pathlib import Path
+
+from ..isolation import UNSAFE_WARNING, IsolationUnavailable, Limits, Mode, probe
+from ..outputs import csv as csv_output
+from ..outputs import feedback, gradebook, report
+from .batch import Options, grade_batch
+from .reading import MAX_NOTEBOOK_MB
+from .secret import read_secret
+from .sources import default_sources, load_source
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``grade`` (see the README's table)."""
+    add = parser.add_argument
+    add("submitted", type=Path,
+        help="nbgrader's submitted folder: SUBMITTED/<student>/tripos2006/*.ipynb")
+    add("--out", type=Path, required=True,
+        help="output folder: grades.csv, feedback/, report.html, autograded/")
+    add("--jobs", type=int, default=max(1, min(8, os.cpu_count() or 1)),
+        help="sandboxes run in parallel (default: the number of CPUs, at most 8)")
+    add("--timeout", type=float, default=10.0, help="time limit per case, in seconds (default 10)")
+    add("--db-url", default=None, help="nbgrader gradebook URL (default sqlite:///<course root>/"
+        "gradebook.db; postgresql://... for a shared server)")
+    add("--reveal-hidden", action="store_true", help="after the deadline: show the failing "
+        "hidden cases' inputs, expected and received values in the feedback")
+    add("--secret-file", type=Path, default=None, help="the course secret that seeds the hidden "
+        "cases (default ~/.config/4f9/secret, created on first use)")
+    add("--source", type=Path, default=None,
+        help="folder of the source notebooks (default: the course's notebooks/)")
+    add("--load-timeout", type=float, default=None, help="seconds allowed for the setup and "
+        "solution cells (default 30 + the per-case time limit)")
+    add("--memory-mb", type=int, default=2048,
+        help="memory limit of each sandbox, in MB (default 2048)")
+    add("--max-notebook-mb", type=float, default=MAX_NOTEBOOK_MB,
+        help=f"larger notebook files are rejected (default {MAX_NOTEBOOK_MB:g})")
+    add("--no-gradebook", action="store_true",
+        help="do not touch nbgrader's gradebook or write autograded notebooks")
+    add("--unsafe-no-isolation", action="store_true", help="grade even when the operating-system "
+        "sandbox is unavailable (student code then runs with your rights: never on real work)")
+    add("--quiet", action="store_true", help="no progress bar")
+
+
+def _mode(args) -> Mode | None:
+    """The sandbox mode, or None (after saying why) when grading must not start."""
+    try:
+        return probe()
+    except IsolationUnavailable as exc:
+        if not args.unsafe_no_isolation:
+            print(f"error: the grading sandbox is unavailable: {exc}\nFix it, or pass "
+                  "--unsafe-no-isolation to grade without isolation (never on real student "
+                  "work)", file=sys.stderr)
+            return None
+    print(UNSAFE_WARNING, file=sys.stderr)
+    return Mode.UNSAFE
+
+
+def _options(args, secret: bytes, mode: Mode) -> Options:
+    limits = Limits(case_timeout=args.timeout,
+                    load_timeout=args.load_timeout if args.load_timeout else 30.0 + args.timeout,
+                    memory_mb=args.memory_mb)
+    return Options(out=args.out, jobs=max(1, args.jobs), limits=limits, secret=secret,
+                   reveal_hidden=args.reveal_hidden, mode=mode,
+                   max_notebook_mb=args.max_notebook_mb, progress=not args.quiet)
+
+
+def main(args: argparse.Namespace) -> int:
+    """Grade ``args.submitted`` into ``args.out``; the exit status (see the module docstring)."""
+    if not args.submitted.is_dir():
+        print(f"error: {args.submitted} is not a folder", file=sys.stderr)
+        return 2
+    paths = (sorted(Path(args.source).glob("q[0-9]*_*.ipynb")) if args.source
+             else default_sources())
+    if not paths:
+        print("error: no source notebooks found", file=sys.stderr)
+        return 2
+    try:
+        secret = read_secret(args.secret_file)
+    except (OSError, ValueError) as exc:
+        print(f"error: cannot read the course secret: {exc}", file=sys.stderr)
+        return 2
+    mode = _mode(args)
+    if mode is None:
+        return 2
+    sources = [load_source(p) for p in paths]
+    args.out.mkdir(parents=True, exist_ok=True)
+    os.chmod(args.out, 0o700)
+    t0 = time.monotonic()
+    batch = grade_batch(args.submitted, sources, _options(args, secret, mode))
+    _write_outputs(batch, sources, args)
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"graded {len(batch.students)} students, {len(batch.results)} cells in "
+          f"{time.monotonic() - t0:.0f} s (grader peak memory {peak_mb:.0f} MB): "
+          f"{args.out / 'grades.csv'}", file=sys.stderr)
+    return 0
+
+
+def _write_outputs(batch, sources, args) -> None:
+    out: Path = args.out
+    csv_output.write_csv(batch.results, out / "grades.csv")
+    feedback.write_all(batch.results, out / "feedback", reveal_hidden=args.reveal_hidden)
+    report.write_report(batch.results, sources, out / "report.html")
+    if args.no_gradebook:
+        return
+    try:
+        gradebook.sync(batch, sources, submitted=args.submitted, out=out, db_url=args.db_url)
+    except Exception as exc:  # noqa: BLE001 - grades.csv is written; say what failed
+        traceback.print_exc(limit=3)
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        print(f"warning: the gradebook could not be updated ({type(exc).__name__}: {first}); "
+              "grades.csv, the feedback and the report are complete", file=sys.stderr)

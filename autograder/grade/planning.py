@@ -1,0 +1,236 @@
+"""Which of a student's cells run, and what each graded cell's source shows before it runs.
+
+:func:`plan_cells` picks the solution cells (by grade_id; when the nbgrader metadata is gone, by
+what a cell defines), in notebook order as "Run All" would; test, figure and explorer cells
+never run. :func:`answer_hint` reads a graded cell's source (never running it) and says whether
+it is still the released stub, empty, or binds the graded name to None, a constant, or a
+function that cannot take the exercise's arguments (issue 9).
+"""
+
+from __future__ import annotations
+
+import ast
+import inspect
+import re
+from dataclasses import dataclass, field
+
+from ..isolation.child import ALLOWED_COURSE_MODULES, ALLOWED_REFERENCE
+from ..model import AnswerHint, AnswerShape, CellKind, SourceNotebook, Submission
+
+
+def to_python(source: str) -> tuple[str | None, str]:
+    """Plain Python for a notebook cell: IPython magics and shell lines turned into no-ops.
+
+    Returns ``(code, note)``; ``code`` is None when the whole cell is a non-Python cell magic
+    (``%%bash``, ``%%html``...), which the grader skips.
+    """
+    lines = source.splitlines()
+    note = ""
+    if lines and lines[0].lstrip().startswith("%%"):
+        magic = lines[0].lstrip()[2:].split()[0] if lines[0].strip() != "%%" else ""
+        if magic in ("time", "timeit", "capture", "prun", "python", "python3", "debug"):
+            lines = lines[1:]
+            note = f"cell magic %%{magic} ignored"
+        else:
+            return None, f"cell magic %%{magic}: cell skipped"
+    text = "\n".join(lines)
+    try:
+        from IPython.core.inputtransformer2 import TransformerManager
+
+        return TransformerManager().transform_cell(text), note
+    except Exception:  # noqa: BLE001 - fall back to dropping magic and shell lines
+        kept = [ln for ln in text.splitlines() if not ln.lstrip().startswith(("%", "!"))]
+        return "\n".join(kept) + "\n", note
+
+
+def _bindings(code: str, name: str) -> list[ast.stmt] | None:
+    """Top-level statements of ``code`` that bind ``name``; None when it does not parse."""
+    try:
+        tree = ast.parse(code)
+    except (SyntaxError, ValueError):
+        return None
+    found = []
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name == name:
+            found.append(node)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            if any(isinstance(t, ast.Name) and t.id == name for t in targets):
+                found.append(node)
+    return found
+
+
+def defines(code: str, name: str) -> bool:
+    """Whether ``code`` defines ``name`` at top level (``def name`` or ``name = ...``)."""
+    found = _bindings(code, name)
+    if found is None:
+        return bool(re.search(rf"^(def\s+{re.escape(name)}\b|{re.escape(name)}\s*=)", code, re.M))
+    return bool(found)
+
+
+@dataclass
+class CellPlan:
+    """The student's cells the sandbox runs (shared by every graded name of a notebook)."""
+
+    cells: list[tuple[str, str]]          #: (label, python) in notebook order
+    missing: set[str]                     #: graded names with no cell at all
+    notes: dict[str, list[str]]           #: graded name -> notes for the student
+    chosen: dict[str, int]                #: graded name -> index (in sub.cells) of its cell
+    by_name: dict[str, int] = field(default_factory=dict)  #: found by definition, not grade_id
+    python: dict[int, str] = field(default_factory=dict)   #: index -> the cell as Python
+
+
+def plan_cells(src: SourceNotebook, sub: Submission) -> CellPlan:
+    """Pick the solution cells to run: by grade_id, else (metadata stripped) by definition."""
+    sol_ids = set(src.solution_ids)
+    names = [g[0] for g in src.graded]
+    notes: dict[str, list[str]] = {n: [] for n in names}
+    by_id: dict[str, list[int]] = {}
+    for k, c in enumerate(sub.cells):
+        if c["cell_type"] == "code" and c["grade_id"] in sol_ids:
+            by_id.setdefault(c["grade_id"], []).append(k)
+    for gid, ks in by_id.items():
+        if len(ks) > 1 and gid in notes:
+            notes[gid].append(f"the solution cell of {gid} appears {len(ks)} times (a copied "
+                              "cell?); all copies ran in notebook order, so the last one counts")
+    python = {k: code for k, c in enumerate(sub.cells) if c["cell_type"] == "code"
+              for code in [to_python(c["source"])[0]] if code is not None}
+    run = {k: gid for gid, ks in by_id.items() for k in ks}
+    plan = CellPlan([], set(), notes, {}, python=python)
+    for name in names:
+        if by_id.get(name):
+            plan.chosen[name] = by_id[name][-1]
+            continue
+        k = _cell_defining(sub, python, run, name)
+        if k is None:
+            plan.missing.add(name)
+            continue
+        plan.chosen[name] = plan.by_name[name] = k
+        run[k] = name
+        notes[name].append(f"the nbgrader metadata of the solution cell of {name} was missing "
+                           "or changed; the cell that defines it was graded instead")
+    plan.cells = [(f"{run[k]} (cell {sub.cells[k]['index'] + 1})", python[k])
+                  for k in sorted(run) if k in python]
+    return plan
+
+
+def _cell_defining(sub: Submission, python: dict[int, str], taken: dict, name: str) -> int | None:
+    candidates = [k for k, c in enumerate(sub.cells)
+                  if k in python and k not in taken
+                  and not (c["grade_id"] or "").startswith("test_") and defines(python[k], name)]
+    return candidates[-1] if candidates else None
+
+
+# --------------------------------------------------------------------------------------------
+# what a graded cell's source shows
+
+
+def answer_hint(code: str, name: str, kind: CellKind, calls=()) -> AnswerHint:
+    """Read ``code`` (the graded cell, as Python) for the shape of its answer to ``name``.
+
+    ``calls`` are ``(args, kwargs)`` of the exercise's cases, used to check that a ``def`` can
+    take them. Returns :attr:`AnswerShape.WRITTEN` whenever the source does not say more.
+    """
+    try:
+        tree = ast.parse(code)
+    except (SyntaxError, ValueError):
+        return AnswerHint()
+    body = [s for s in tree.body if not _is_constant_expr(s)]
+    if not body or all(isinstance(s, ast.Pass) for s in body):
+        return AnswerHint(AnswerShape.EMPTY)
+    if len(body) == 1 and _is_stub_raise(body[0]):
+        return AnswerHint(AnswerShape.UNTOUCHED)
+    found = _bindings(code, name) or []
+    hint = _hint_of_binding(found[-1], kind, calls) if found else AnswerHint()
+    hint.reference = reference_import(tree)
+    return hint
+
+
+def reference_import(tree: ast.AST) -> str:
+    """The first import of the course's reference in ``tree`` (anywhere in it), else ``""``.
+
+    Everything under ``course_lib`` is the reference except the data tables the sandbox
+    provides (:data:`autograder.isolation.child.ALLOWED_REFERENCE`).
+    """
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if _is_course(alias.name) and alias.name not in ALLOWED_COURSE_MODULES:
+                    return alias.name
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and _is_course(node.module):
+            allowed = ALLOWED_REFERENCE.get(node.module, ())
+            for alias in node.names:
+                full = f"{node.module}.{alias.name}"
+                if alias.name not in allowed and full not in ALLOWED_REFERENCE:
+                    return full
+    return ""
+
+
+def _is_course(module: str | None) -> bool:
+    return bool(module) and (module == "course_lib" or module.startswith("course_lib."))
+
+
+def _hint_of_binding(node: ast.stmt, kind: CellKind, calls) -> AnswerHint:
+    if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+        inner = [s for s in node.body if not _is_constant_expr(s)]
+        if len(inner) == 1 and _is_stub_raise(inner[0]):
+            return AnswerHint(AnswerShape.UNTOUCHED)
+        return _arity_hint(node.name, node.args, calls)
+    value = node.value
+    if isinstance(value, ast.Constant) and value.value is None:
+        return AnswerHint(AnswerShape.NONE)
+    if kind is not CellKind.FUNCTION:
+        return AnswerHint()
+    if isinstance(value, ast.Lambda):
+        return _arity_hint("the lambda", value.args, calls)
+    what = _literal_kind(value)
+    return AnswerHint(AnswerShape.NOT_A_FUNCTION, what) if what else AnswerHint()
+
+
+def _literal_kind(value: ast.expr) -> str:
+    if isinstance(value, ast.Constant):
+        return {bool: "True or False", str: "a string", bytes: "bytes"}.get(
+            type(value.value), "a number")
+    kinds = {ast.List: "a list", ast.Tuple: "a tuple", ast.Dict: "a dict", ast.Set: "a set",
+             ast.ListComp: "a list", ast.DictComp: "a dict", ast.SetComp: "a set"}
+    return kinds.get(type(value), "")
+
+
+def _arity_hint(label: str, args: ast.arguments, calls) -> AnswerHint:
+    sig = _signature(args)
+    for a, kw in calls:
+        try:
+            sig.bind(*a, **kw)
+        except TypeError as exc:
+            return AnswerHint(AnswerShape.WRONG_ARITY, f"{label}{sig} {exc}")
+    return AnswerHint()
+
+
+def _signature(args: ast.arguments) -> inspect.Signature:
+    """The call signature of a ``def`` or ``lambda`` from its AST (defaults as placeholders)."""
+    P = inspect.Parameter
+    params = []
+    positional = [(a, P.POSITIONAL_ONLY) for a in args.posonlyargs]
+    positional += [(a, P.POSITIONAL_OR_KEYWORD) for a in args.args]
+    first_default = len(positional) - len(args.defaults)
+    for i, (a, kind) in enumerate(positional):
+        params.append(P(a.arg, kind, default=... if i >= first_default else P.empty))
+    if args.vararg:
+        params.append(P(args.vararg.arg, P.VAR_POSITIONAL))
+    for a, d in zip(args.kwonlyargs, args.kw_defaults, strict=True):
+        params.append(P(a.arg, P.KEYWORD_ONLY, default=... if d is not None else P.empty))
+    if args.kwarg:
+        params.append(P(args.kwarg.arg, P.VAR_KEYWORD))
+    return inspect.Signature(params)
+
+
+def _is_constant_expr(node: ast.stmt) -> bool:
+    return isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant)
+
+
+def _is_stub_raise(node: ast.stmt) -> bool:
+    """``raise NotImplementedError`` or ``raise NotImplementedError(...)``: the released stub."""
+    if not isinstance(node, ast.Raise) or node.exc is None:
+        return False
+    exc = node.exc.func if isinstance(node.exc, ast.Call) else node.exc
+    return isinstance(exc, ast.Name) and exc.id == "NotImplementedError"

@@ -1,0 +1,95 @@
+"""The job the grader hands to the sandbox: plain dataclasses, the interface of this package.
+
+A :class:`NotebookJob` is one student's notebook: the instructor's setup cell, then for every
+graded name the cells to run first and the cases to call it on. :func:`run_notebook
+<autograder.isolation.runner.run_notebook>` runs the whole job in ONE sandbox and answers one
+:class:`autograder.model.NameRun` per name.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+FUNCTION = "function"   #: a graded function, called once per case
+CHOICE = "choice"       #: a multiple-choice variable: its one case's "result" is its value
+KINDS = (FUNCTION, CHOICE)
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Resource limits of one job (the defaults suit the course's exercises)."""
+
+    case_timeout: float = 10.0    #: wall seconds per case
+    load_timeout: float = 40.0    #: wall seconds for the setup cell, and for each solution cell
+    memory_mb: int = 2048         #: the WHOLE job (all its processes, incl. its tmpfs scratch)
+    scratch_mb: int = 64          #: size of the private tmpfs (/tmp, HOME, cwd)
+    pids: int = 64                #: processes + threads of the whole job
+    output_bytes: int = 20_000    #: captured output kept per name / per case
+    max_launches: int = 3         #: worker processes per name (restarts after a crash)
+
+    def __post_init__(self):
+        for name in ("case_timeout", "load_timeout"):
+            if not float(getattr(self, name)) > 0:
+                raise ValueError(f"Limits.{name} must be a positive number of seconds")
+        for name in ("memory_mb", "scratch_mb", "pids", "output_bytes", "max_launches"):
+            value = getattr(self, name)
+            if type(value) is not int or value < 1:
+                raise ValueError(f"Limits.{name} must be a positive int, got {value!r}")
+
+
+@dataclass
+class CaseInput:
+    """The inputs of one case (plain data) and how many bytes its encoded result may take."""
+
+    args: tuple
+    kwargs: dict
+    result_cap: int = 1_000_000
+
+
+@dataclass
+class NameJob:
+    """One graded name: its cells (run in order first), then its cases.
+
+    For ``kind="choice"`` there is exactly one ``CaseInput(args=(), kwargs={})`` and its result
+    is the variable's value.
+    """
+
+    name: str
+    kind: str
+    cells: list[tuple[str, str]]
+    cases: list[CaseInput] = field(default_factory=list)
+
+
+@dataclass
+class NotebookJob:
+    """One student's notebook: everything the sandbox runs for it."""
+
+    job_id: str
+    setup_source: str
+    names: list[NameJob]
+
+
+def validate_job(job: NotebookJob) -> None:
+    """Raise ``ValueError`` naming the field when ``job`` is malformed (the caller's bug)."""
+    if not isinstance(job, NotebookJob):
+        raise ValueError(f"job must be a NotebookJob, got {type(job).__name__}")
+    if type(job.setup_source) is not str:
+        raise ValueError("job.setup_source must be a str")
+    seen = set()
+    for nj in job.names:
+        if type(nj.name) is not str or not nj.name.isidentifier():
+            raise ValueError(f"NameJob.name must be a Python identifier, got {nj.name!r}")
+        if nj.name in seen:
+            raise ValueError(f"NameJob.name {nj.name!r} appears twice in job.names")
+        seen.add(nj.name)
+        if nj.kind not in KINDS:
+            raise ValueError(f"NameJob.kind must be one of {KINDS}, got {nj.kind!r}")
+        if any(type(lbl) is not str or type(src) is not str for lbl, src in nj.cells):
+            raise ValueError(f"NameJob.cells of {nj.name!r} must be (label, source) str pairs")
+        if nj.kind == CHOICE and (len(nj.cases) != 1 or nj.cases[0].args != ()
+                                  or nj.cases[0].kwargs != {}):
+            raise ValueError(f"NameJob.cases of choice {nj.name!r} must be exactly one "
+                             "CaseInput(args=(), kwargs={})")
+        for case in nj.cases:
+            if type(case.result_cap) is not int or case.result_cap < 1:
+                raise ValueError(f"CaseInput.result_cap of {nj.name!r} must be a positive int")

@@ -1,0 +1,304 @@
+"""The grader's side: run one student's notebook in one sandbox, read what comes back.
+
+:func:`run_notebook` writes the job (plain data only) into a private directory, takes a uid no
+other job uses (as root), makes the job's cgroup, starts the child (:mod:`.child`) inside
+bubblewrap, and reads its ONE channel with a hard byte cap and a wall-clock budget. Every
+record is re-validated here (:class:`Collector`); nothing the child announces is trusted. When
+the job ends, for whatever reason, the sandbox is killed, and as root no process of its uid is
+left when this returns.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+
+from autograder.model import CaseOutcome, NameRun, OutcomeKind
+
+from . import allowlist, bwrap, child
+from .cgroup import JobCgroup
+from .identity import allocate_uid
+from .jobs import Limits, NotebookJob, validate_job
+
+#: Seconds the sandbox may take to start (mounts, the interpreter, NumPy) beyond the limits.
+STARTUP_SECONDS = 15.0
+NOTE_CHARS = 2000               #: characters kept of one load note
+#: The shell line that puts the sandbox into its cgroup(s) before anything in it starts.
+JOIN_CGROUP = 'while [ "$1" != -- ]; do echo $$ > "$1" || exit 125; shift; done; shift; exec "$@"'
+#: Why the cases the child never reported have no result, by how the channel ended.
+ENDINGS = {
+    "done": (OutcomeKind.NOT_RUN, "not reported by the sandbox"),
+    "timeout": (OutcomeKind.NOT_RUN, "not run: the job's time ran out"),
+    "too-large": (OutcomeKind.REJECTED, "result too large"),
+    "garbage": (OutcomeKind.REJECTED, "the sandbox's output was not understood"),
+    "eof": (OutcomeKind.CRASHED, "the sandbox ended before this case"),
+}
+
+
+def job_budget(job: NotebookJob, limits: Limits) -> float:
+    """Wall seconds the whole job may take (the supervisor's own limits, every restart)."""
+    per_cell = limits.load_timeout + child.GRACE
+    total = STARTUP_SECONDS + per_cell
+    for nj in job.names:
+        total += limits.max_launches * per_cell * max(1, len(nj.cells))
+        total += len(nj.cases) * (limits.case_timeout + child.GRACE + 0.5)
+    return total
+
+
+def _text(value, cap: int) -> str:
+    text = value if type(value) is str else ""
+    return text if len(text) <= cap else text[:cap] + "..."
+
+
+class NameState:
+    """What the grader has received for one name so far."""
+
+    def __init__(self, nj, limits: Limits):
+        self.nj, self.limits = nj, limits
+        self.outcomes: dict[int, CaseOutcome] = {}
+        self.defined, self.reached = True, False
+        self.notes: list[str] = []
+        self.printed, self.launches = "", 1
+        self.started = self.ended = 0.0
+
+    def take_case(self, rec: dict, size: int) -> None:
+        i = rec.get("i")
+        if type(i) is not int or not 0 <= i < len(self.nj.cases) or i in self.outcomes:
+            return
+        case = self.nj.cases[i]
+        seconds = rec.get("seconds")
+        seconds = float(seconds) if type(seconds) in (int, float) and 0 <= seconds < 1e6 else 0.0
+        out = CaseOutcome(i, OutcomeKind.REJECTED, seconds=seconds,
+                          printed=_text(rec.get("printed"), self.limits.output_bytes + 100),
+                          message=_text(rec.get("message"), NOTE_CHARS))
+        kinds = {k.value: k for k in OutcomeKind}
+        kind = kinds.get(rec.get("kind")) if type(rec.get("kind")) is str else None
+        if size > child.record_cap(case.result_cap, self.limits.output_bytes):
+            out.message = "result too large"
+        elif kind is None:
+            out.message = "unrecognised result"
+        elif kind is OutcomeKind.RETURNED:
+            try:
+                out.value = child.decode_value(rec.get("value"), child.Budget(case.result_cap))
+                out.kind, out.message = kind, ""
+            except child.BadValue as exc:
+                out.message = str(exc)
+        else:
+            out.kind = kind
+            if kind is OutcomeKind.RAISED:
+                mro = rec.get("mro")
+                out.error_type = _text(rec.get("etype"), 200)
+                out.error_mro = tuple(_text(m, 200) for m in mro[:20]) \
+                    if type(mro) is list else ()
+        self.outcomes[i] = out
+
+    def result(self, ending: str, setup_notes: list[str]) -> NameRun:
+        kind, message = ENDINGS.get(ending, ENDINGS["eof"])
+        notes = list(setup_notes) + self.notes
+        if not self.reached:
+            notes.append(f"the sandbox did not reach {self.nj.name!r} ({message})")
+        outcomes = [self.outcomes.get(i) or CaseOutcome(i, kind, message=message)
+                    for i in range(len(self.nj.cases))]
+        seconds = max(0.0, (self.ended or time.monotonic()) - self.started) \
+            if self.started else 0.0
+        return NameRun(self.nj.name, outcomes, defined=self.defined, load_notes=notes,
+                       printed=self.printed, launches=self.launches, seconds=seconds)
+
+
+class Collector:
+    """Validates the child's records into per-name results; caps every count and size."""
+
+    def __init__(self, job: NotebookJob, limits: Limits):
+        self.limits = limits
+        self.names = {nj.name: NameState(nj, limits) for nj in job.names}
+        self.setup_notes: list[str] = []
+        self.records = 0
+
+    def frame_cap(self) -> int:
+        caps = [c.result_cap for s in self.names.values() for c in s.nj.cases] or [0]
+        return max(child.record_cap(max(caps), self.limits.output_bytes),
+                   child.record_cap(0, 2 * self.limits.output_bytes))
+
+    def total_cap(self) -> int:
+        """The most bytes the channel may carry: every case's record cap, plus notes."""
+        out = self.limits.output_bytes
+        total = child.RECORD_OVERHEAD
+        for state in self.names.values():
+            total += sum(child.record_cap(c.result_cap, out) for c in state.nj.cases)
+            total += child.record_cap(0, 2 * out) + (len(state.nj.cells) + 4) * 12 * NOTE_CHARS
+        return total
+
+    def take(self, rec: dict, raw: bytes) -> bool:
+        """One record; True when the child said it is done."""
+        self.records += 1
+        t, name = rec.get("t"), rec.get("name")
+        if t == "done":
+            return True
+        if t == "note" and name is None and len(self.setup_notes) < 10:
+            self.setup_notes.append(_text(rec.get("text"), NOTE_CHARS))
+        state = self.names.get(name) if type(name) is str else None
+        if state is None:
+            return False
+        if t == "name":
+            state.reached, state.started = True, time.monotonic()
+        elif t == "note" and len(state.notes) < len(state.nj.cells) + 4:
+            state.notes.append(_text(rec.get("text"), NOTE_CHARS))
+        elif t == "loaded":
+            state.defined = rec.get("defined") is True
+            state.printed = _text(rec.get("printed"), self.limits.output_bytes + 100)
+        elif t == "case":
+            state.take_case(rec, len(raw))
+        elif t == "end":
+            n = rec.get("launches")
+            state.launches = n if type(n) is int and 1 <= n <= self.limits.max_launches else 1
+            state.ended = time.monotonic()
+        return False
+
+    def results(self, ending: str) -> dict[str, NameRun]:
+        return {name: s.result(ending, self.setup_notes) for name, s in self.names.items()}
+
+
+def _job_document(job: NotebookJob, limits: Limits, privileged: bool) -> dict:
+    """The job as the child reads it: limits, setup, names, cases (inputs in wire format)."""
+    names = []
+    for k, nj in enumerate(job.names):
+        cases = []
+        for i, case in enumerate(nj.cases):
+            try:
+                unlimited = child.Budget(1 << 62)
+                args = child.encode_value(tuple(case.args), unlimited)
+                kwargs = child.encode_value(dict(case.kwargs), unlimited)
+            except child.NotPlain as exc:
+                raise ValueError(f"job.names[{k}].cases[{i}] holds {exc}, not plain "
+                                 "data") from None
+            cases.append({"args": args, "kwargs": kwargs, "cap": case.result_cap})
+        names.append({"name": nj.name, "kind": nj.kind, "cells": [list(c) for c in nj.cells],
+                      "cases": cases})
+    lim = {k: getattr(limits, k) for k in Limits.__dataclass_fields__}
+    lim.update(nproc=privileged, budget_seconds=math.ceil(job_budget(job, limits)))
+    return {"limits": lim, "setup": job.setup_source, "names": names}
+
+
+def _write_job_files(job: NotebookJob, limits: Limits, workdir: str, privileged: bool) -> str:
+    path = os.path.join(workdir, "job.json")
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump(_job_document(job, limits, privileged), f)
+    os.chmod(path, 0o644)
+    allowlist.write_package(os.path.join(workdir, "site"))
+    return path
+
+
+def _command(mode: bwrap.Mode, workdir: str, job_file: str, channel_fd: int, limits: Limits,
+             uid: int | None) -> tuple[list[str], str]:
+    """``(argv, cwd)`` of the child."""
+    child_file = os.path.realpath(child.__file__)
+    if mode is bwrap.Mode.ISOLATED:
+        return bwrap.bwrap_command(job_file, os.path.join(workdir, "site"), child_file,
+                                   channel_fd, limits.scratch_mb, uid), "/"
+    site = os.path.join(workdir, "site")
+    for path in bwrap.numpy_dirs():
+        os.symlink(path, os.path.join(site, os.path.basename(path)))
+    scratch = os.path.join(workdir, "scratch")
+    os.mkdir(scratch)
+    return bwrap.unsafe_command(job_file, site, child_file, channel_fd), scratch
+
+
+def _read_channel(proc: subprocess.Popen, rfd: int, collector: Collector,
+                  deadline: float) -> str:
+    """Feed the channel's records to ``collector``; how it ended (a key of ENDINGS)."""
+    reader = child.FrameReader(rfd, collector.frame_cap(), collector.total_cap())
+    while True:
+        event, payload = reader.next(deadline)
+        if event != "record":
+            return event
+        if collector.take(*payload):
+            return "done"
+
+
+def _stop(proc: subprocess.Popen, ending: str) -> None:
+    """End the sandbox: killing bubblewrap kills its PID namespace (the supervisor is PID 1,
+    with the parent-death signal set), and with it every process of the job. After a normal
+    end, bubblewrap is first given a moment to collect the supervisor and exit by itself."""
+    if ending == "done":
+        try:
+            proc.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            pass
+    if proc.poll() is None:
+        try:
+            os.killpg(proc.pid, 9)
+        except OSError:
+            proc.kill()
+    try:
+        proc.wait(timeout=30)
+    except subprocess.TimeoutExpired:  # pragma: no cover - SIGKILL always ends it
+        pass
+
+
+def _spawn(argv: list[str], cwd: str, env: dict, wfd: int, errfile, cgroup) -> subprocess.Popen:
+    if cgroup is not None and cgroup.procs_files():
+        argv = [bwrap.posix_shell(), "-c", JOIN_CGROUP, "sh", *cgroup.procs_files(), "--", *argv]
+    return subprocess.Popen(argv, cwd=cwd, env=env, stdin=subprocess.DEVNULL,
+                            stdout=subprocess.DEVNULL, stderr=errfile, pass_fds=(wfd,),
+                            start_new_session=True)
+
+
+def _sandbox_failure(proc: subprocess.Popen, errfile) -> str:
+    errfile.seek(0)
+    text = errfile.read(4000).decode("utf-8", "replace").strip()
+    return f"the sandbox did not start (exit code {proc.returncode}): {text or 'no message'}"
+
+
+DEFAULT_LIMITS = Limits()
+
+
+def run_notebook(job: NotebookJob, limits: Limits = DEFAULT_LIMITS,
+                 mode: bwrap.Mode | None = None) -> dict[str, NameRun]:
+    """Run one student's notebook in ONE sandbox; one :class:`NameRun` per name of the job.
+
+    Never raises for anything the student's code does: every case gets an outcome. Raises
+    ``ValueError`` for a malformed job, :class:`IsolationUnavailable` when ``mode`` is None and
+    no sandbox can be made, and :class:`IsolationError` when the sandbox fails before any of
+    the student's code ran (the grader's problem). Safe to call from several threads, and
+    from several processes on one machine.
+    """
+    validate_job(job)
+    mode = bwrap.probe() if mode is None else mode
+    root = mode is bwrap.Mode.ISOLATED and bwrap.privileged()
+    collector = Collector(job, limits)
+    workdir = tempfile.mkdtemp(prefix="autograder-isolation-")
+    lease = cgroup = None
+    try:
+        job_file = _write_job_files(job, limits, workdir, root)
+        lease = allocate_uid() if root else None
+        cgroup = JobCgroup(f"u{lease.uid}", limits.memory_mb, limits.pids) if root else None
+        rfd, wfd = os.pipe()
+        argv, cwd = _command(mode, workdir, job_file, wfd, limits,
+                             lease.uid if lease else None)
+        env = bwrap.child_env("/tmp" if mode is bwrap.Mode.ISOLATED else cwd)
+        with tempfile.TemporaryFile() as errfile:
+            try:
+                proc = _spawn(argv, cwd, env, wfd, errfile, cgroup)
+            finally:
+                os.close(wfd)
+            ending = "eof"
+            try:
+                ending = _read_channel(proc, rfd, collector,
+                                       time.monotonic() + job_budget(job, limits))
+            finally:
+                os.close(rfd)
+                _stop(proc, ending)
+            if ending == "eof" and collector.records == 0:
+                raise bwrap.IsolationError(_sandbox_failure(proc, errfile))
+    finally:
+        if cgroup is not None:
+            cgroup.remove()
+        if lease is not None:
+            lease.release()
+        shutil.rmtree(workdir, ignore_errors=True)
+    return collector.results(ending)

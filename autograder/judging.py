@@ -1,0 +1,245 @@
+"""Verdicts and scores: the one implementation behind ``incell.check()`` and ``grade``.
+
+The sandbox (or, inside a notebook kernel, :func:`call_in_process`) observes what a student's
+code did on each case as a :class:`~autograder.model.CaseOutcome`; this module judges it:
+
+- :func:`judge_case` gives one case's :class:`~autograder.model.Verdict` and a reason, comparing a
+  returned value with the reference's answer by the exercise's own rule. A rule returns ``None``
+  (a match), a :class:`~autograder.exercises.base.Mismatch` (its ``kind`` says wrong shape or
+  wrong value) or a plain ``str`` (a wrong value). Nothing here looks inside message text.
+- :func:`judge_choice` judges a multiple-choice answer with
+  :func:`course_lib.answers.choice_letters`, the course's one answer format.
+- :func:`summarise` turns a cell's case records into its score, status and message;
+  :func:`unanswered_or_broken` gives the status of a cell whose answer is missing or malformed
+  (issue 9: the student is told what to do, and never that the grader failed).
+
+It imports the model and the registry's helpers, nothing of ``grade`` or ``outputs``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .exercises.base import Exercise, Mismatch, NotPlainData, same_choice, to_plain
+from .model import (SEVERITY, VERDICT_STATUS, VERDICT_WORDS, AnswerHint, AnswerShape,
+                    CaseOutcome, CaseRecord, CellKind, OutcomeKind, Status, ValueSummary,
+                    Verdict)
+
+#: The MRO entry of the exception the released stubs raise (``raise NotImplementedError()``).
+NOT_IMPLEMENTED = "builtins.NotImplementedError"
+#: Arrays with more entries than this are kept only as a summary once judged.
+KEEP_ENTRIES = 20_000
+#: Rows of a summarised array that are kept (enough for the feedback's plots).
+KEEP_ROWS = 400
+
+
+def clip(text: str, n: int) -> str:
+    """``text`` on one line, at most ``n`` characters."""
+    text = " ".join(str(text).split())
+    return text if len(text) <= n else text[: n - 3] + "..."
+
+
+# --------------------------------------------------------------------------------------------
+# one case
+
+
+def rule_verdict(ex: Exercise, expected, received) -> tuple[Verdict, str]:
+    """Compare with the exercise's rule: ``(PASS, "")`` or the mismatch's verdict and text."""
+    try:
+        why = ex.compare(expected, received)
+    except Exception as exc:  # noqa: BLE001 - a rule that cannot compare is a wrong answer
+        return Verdict.WRONG_VALUE, f"wrong value (the answer could not be compared: " \
+                                    f"{type(exc).__name__})"
+    if why is None:
+        return Verdict.PASS, ""
+    if isinstance(why, Mismatch):
+        return Verdict(why.kind), why.text
+    return Verdict.WRONG_VALUE, str(why)
+
+
+def judge_case(ex: Exercise, case, expected, outcome: CaseOutcome) -> tuple[Verdict, str]:
+    """``(verdict, reason)`` of one case of a graded function (Q-independent: any exercise)."""
+    kind = OutcomeKind(outcome.kind)
+    if kind is OutcomeKind.RETURNED:
+        return _judge_returned(ex, case, expected, outcome.value)
+    if kind is OutcomeKind.RAISED:
+        return _judge_raised(case, outcome)
+    if kind is OutcomeKind.TIMEOUT:
+        return Verdict.TIMEOUT, outcome.message or "took too long"
+    if kind is OutcomeKind.CRASHED:
+        extra = f" ({outcome.message})" if outcome.message else ""
+        return Verdict.ERROR, "crashed the Python process" + extra
+    if kind is OutcomeKind.REJECTED:
+        return Verdict.REJECTED, outcome.message or "returned something that is not plain numbers"
+    if kind is OutcomeKind.REFERENCE_USED:
+        return Verdict.REFERENCE_USED, outcome.message or "called the reference implementation"
+    return Verdict.ERROR, outcome.message or "not run"
+
+
+def _judge_returned(ex, case, expected, value) -> tuple[Verdict, str]:
+    if case.raises is not None:
+        return Verdict.WRONG_VALUE, (f"should raise {case.raises.__name__} for this input, but "
+                                     "returned a value")
+    try:
+        plain = to_plain(value)
+    except NotPlainData as exc:
+        return Verdict.REJECTED, f"returned {exc}, not plain numbers"
+    return rule_verdict(ex, expected, plain)
+
+
+def _judge_raised(case, outcome: CaseOutcome) -> tuple[Verdict, str]:
+    mro = tuple(outcome.error_mro)
+    if case.raises is not None:
+        want = f"{case.raises.__module__}.{case.raises.__qualname__}"
+        if want in mro:
+            return Verdict.PASS, ""
+    if NOT_IMPLEMENTED in mro:
+        return Verdict.UNANSWERED, ("raised NotImplementedError: the function is not written "
+                                    "yet (replace the stub's raise with your code)")
+    if case.raises is not None:
+        return Verdict.ERROR, (f"raised {outcome.error_type} ({clip(outcome.message, 200)}) "
+                               f"instead of {case.raises.__name__}")
+    return Verdict.ERROR, f"raised {outcome.error_type}: {clip(outcome.message, 300)}"
+
+
+def judge_choice(ex: Exercise, outcome: CaseOutcome) -> tuple[Verdict, str]:
+    """``(verdict, reason)`` of a multiple-choice answer (its one "case" is the variable)."""
+    if OutcomeKind(outcome.kind) is not OutcomeKind.RETURNED:
+        return judge_case(ex, _NO_CASE, None, outcome)
+    why = same_choice(ex.answer, outcome.value, ex.options, name=ex.name)
+    if why is None:
+        return Verdict.PASS, ""
+    return Verdict(why.kind), why.text
+
+
+class _NoCase:
+    raises = None
+
+
+_NO_CASE = _NoCase()
+
+
+def call_in_process(func, case, index: int = 0) -> CaseOutcome:
+    """Call ``func`` on ``case`` in this process and record what happened (for ``incell``)."""
+    t0 = time.perf_counter()
+    try:
+        value = func(*case.args, **case.kwargs)
+    except Exception as exc:  # noqa: BLE001 - the student's code may raise anything
+        mro = tuple(f"{c.__module__}.{c.__qualname__}" for c in type(exc).__mro__)
+        return CaseOutcome(index, OutcomeKind.RAISED, error_type=type(exc).__name__,
+                           error_mro=mro, message=str(exc), seconds=time.perf_counter() - t0)
+    return CaseOutcome(index, OutcomeKind.RETURNED, value=value,
+                       seconds=time.perf_counter() - t0)
+
+
+# --------------------------------------------------------------------------------------------
+# a cell
+
+
+def summarise(records: list[CaseRecord], points: float,
+              kind: CellKind = CellKind.FUNCTION) -> tuple[float, Status, str]:
+    """``(score, status, message)`` of a test cell: ``points × passed / cases``; the status
+    names the most serious failure (:data:`~autograder.model.SEVERITY`)."""
+    n = len(records)
+    if n == 0:
+        return 0.0, Status.GRADER_ERROR, "no cases could be run (instructor: check the registry)"
+    passed = sum(r.verdict is Verdict.PASS for r in records)
+    counts: dict[Verdict, int] = {}
+    for r in records:
+        if r.verdict is not Verdict.PASS:
+            counts[r.verdict] = counts.get(r.verdict, 0) + 1
+    if Verdict.REFERENCE_USED in counts:
+        ref = next(r for r in records if r.verdict is Verdict.REFERENCE_USED)
+        return 0.0, Status.REFERENCE_USED, (f"{clip(ref.reason, 160)}: a graded function must "
+                                            "be your own work, so this test scores 0")
+    score = round(points * passed / n, 6)
+    if kind is CellKind.CHOICE:
+        return score, _status_of(counts) if counts else Status.OK, \
+            ("correct" if not counts else clip(records[0].reason, 300))
+    if passed == n:
+        return score, Status.OK, f"all {n} cases passed"
+    parts = [f"{c} {VERDICT_WORDS[v]}" for v, c in sorted(counts.items(), key=lambda x: -x[1])]
+    msg = f"{passed} of {n} cases passed ({', '.join(parts)})"
+    first = next((r for r in records if r.verdict is not Verdict.PASS and r.visible), None)
+    if first is not None:
+        msg += f"; e.g. {first.label or 'a visible case'}: {clip(first.reason, 200)}"
+    else:
+        first = next(r for r in records if r.verdict is not Verdict.PASS)
+        msg += f"; e.g. a hidden case: {VERDICT_WORDS[first.verdict]}"
+    return score, _status_of(counts), msg
+
+
+def _status_of(counts: dict[Verdict, int]) -> Status:
+    statuses = {VERDICT_STATUS[v] for v in counts}
+    return next(s for s in SEVERITY if s in statuses)
+
+
+def unanswered_or_broken(name: str, kind: CellKind, hint: AnswerHint, defined: bool,
+                         load_why: str = "") -> tuple[Status, str] | None:
+    """The status and advice for a cell whose answer is absent or malformed, else None.
+
+    ``hint`` is what the cell's source shows (:class:`~autograder.model.AnswerShape`);
+    ``defined`` whether the name existed after the solution cells ran. Only consulted when the
+    cell earned nothing, so a cell that works despite an odd shape keeps its score.
+    """
+    what = "function" if kind is CellKind.FUNCTION else "answer variable"
+    shape = hint.shape
+    if shape is AnswerShape.UNTOUCHED:
+        return Status.UNANSWERED, (f"not answered: the cell of {name} is still the released "
+                                   "stub (raise NotImplementedError()); write your answer in "
+                                   "its place, run the cell and resubmit")
+    if shape is AnswerShape.EMPTY:
+        return Status.UNANSWERED, (f"not answered: the solution cell of {name} has no code; "
+                                   f"define the {what} {name} there and resubmit")
+    if shape is AnswerShape.NONE:
+        return Status.UNANSWERED, (f"not answered: your cell sets {name} to None; "
+                                   + (f"define it with def {name}(...)" if kind is
+                                      CellKind.FUNCTION else "set it to option letters such as "
+                                      "\"b\"") + " and resubmit")
+    if shape is AnswerShape.NOT_A_FUNCTION and kind is CellKind.FUNCTION:
+        return Status.FAILED, (f"{name} must be a function (def {name}(...)), but your cell "
+                               f"sets it to {hint.detail}; keep the released signature")
+    if shape is AnswerShape.WRONG_ARITY and kind is CellKind.FUNCTION:
+        return Status.FAILED, (f"{name} cannot be called as the exercise calls it: {hint.detail}; "
+                               "keep the released signature (names and number of arguments)")
+    if not defined:
+        why = f" ({load_why})" if load_why else ""
+        return Status.ERROR, (f"the {what} {name} is not defined after running your solution "
+                              f"cells{why}; run your notebook top to bottom (Restart & Run All) "
+                              "to find the error")
+    return None
+
+
+def reference_imported(name: str, reference: str) -> tuple[Status, str]:
+    """The status of a graded function whose cell imports the course's reference."""
+    return Status.REFERENCE_USED, (f"the cell of {name} imports {reference}, the course's "
+                                   "reference implementation: a graded function must be your "
+                                   "own work, so this test scores 0")
+
+
+# --------------------------------------------------------------------------------------------
+# keeping values small once judged
+
+
+def keep(value):
+    """``value`` as the feedback keeps it: small values whole, big arrays as a
+    :class:`~autograder.model.ValueSummary` (shape, dtype, the first rows)."""
+    if isinstance(value, np.ndarray) and value.size > KEEP_ENTRIES:
+        head = np.array(value[:KEEP_ROWS] if value.ndim else value, copy=True)
+        if head.size > KEEP_ENTRIES:
+            head = head.reshape(-1)[:KEEP_ENTRIES]
+        return ValueSummary(tuple(value.shape), str(value.dtype), head)
+    if isinstance(value, tuple):
+        return tuple(keep(v) for v in value)
+    if isinstance(value, str) and len(value) > 2000:
+        return value[:2000] + "…"
+    return value
+
+
+def clip_block(text: str, n: int) -> str:
+    """``text`` (several lines) cut to ``n`` characters, saying how much was left out."""
+    if len(text) <= n:
+        return text
+    return text[:n] + f"\n... [{len(text) - n} more characters not shown]"

@@ -1,0 +1,200 @@
+"""Per-student feedback: ``OUT/feedback/<student>/<notebook>.html``.
+
+What a student sees, per graded name: the score and a sentence saying why; every *visible* case
+in full (its inputs, the expected and the received value, what was wrong); for *hidden* cases only
+how many failed and how (wrong value, wrong shape, error, timeout...): no inputs, no exception
+text, nothing they printed. With ``--reveal-hidden`` (after the deadline) the failing hidden cases
+are shown in full too. Where an answer is geometric (a curve, a polygon, a mesh) a small inline
+SVG draws the expected and the received answer on top of each other.
+
+The page is built from the grader's results alone: it never reads a test cell, so the hidden
+tests' code (which plain ``nbgrader generate_feedback`` shows, nbgrader #917 and #1363) cannot
+leak. Choice answers are never revealed.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..model import VERDICT_WORDS, CaseRecord, CellKind, CellResult, Verdict
+from .html import e, page, plot_data, svg_lines, value_text
+
+_STYLE = """
+.total{font-size:1.1em;color:#444}.msg{margin:.3em 0 .6em}
+.badge{display:inline-block;padding:.05em .5em;border-radius:.8em;font-size:.85em;color:#fff}
+.ok{background:#2e7d32}.failed{background:#c62828}.error{background:#8e24aa}
+.timeout{background:#ef6c00}.missing,.unreadable,.unanswered{background:#616161}
+.reference-used,.rejected-output{background:#b71c1c}.manual{background:#1565c0}
+.grader-error{background:#000}.pass{color:#2e7d32}.fail{color:#c62828}
+details{margin:.4em 0}svg{background:#fafafa;border:1px solid #ddd}.legend span{margin-right:1.2em}
+"""
+#: Characters of the student's own code shown back.
+CODE_CHARS = 20_000
+#: Characters of printed output shown.
+PRINTED_CHARS = 5_000
+#: Failing hidden cases listed when revealed.
+REVEAL_ROWS = 20
+
+
+def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = False) -> list[Path]:
+    """Write one page per (student, notebook) that has results; returns the files written."""
+    by_key: dict[tuple[str, str], list[CellResult]] = {}
+    for r in results:
+        by_key.setdefault((r.student, r.notebook), []).append(r)
+    written = []
+    for (student, notebook), rows in sorted(by_key.items()):
+        path = Path(folder) / student / f"{notebook}.html"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(render(student, notebook, rows, reveal_hidden), encoding="utf-8")
+        written.append(path)
+    return written
+
+
+def render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: bool) -> str:
+    """The feedback page of one student's notebook."""
+    auto = [r for r in rows if r.kind is not CellKind.MANUAL]
+    manual = [r for r in rows if r.kind is CellKind.MANUAL]
+    got = sum(r.score or 0.0 for r in auto)
+    total = (f"<p class='total'>{e(student)}: automatically graded <b>{round(got, 2):g} / "
+             f"{sum(r.max_score for r in auto):g}</b>")
+    if manual:
+        total += (f"; written answers ({sum(r.max_score for r in manual):g} marks) are marked by "
+                  "hand")
+    body = [f"<h1>{e(notebook)}</h1>", total + "</p>"]
+    if reveal_hidden:
+        body.append("<p class='note'>The failing hidden cases are shown in full (released after "
+                    "the deadline).</p>")
+    body += [_cell_html(r, reveal_hidden) for r in rows]
+    return page(f"{notebook}: feedback for {student}", body, _STYLE)
+
+
+def _cell_html(r: CellResult, reveal: bool) -> str:
+    score = "–" if r.score is None else f"{round(r.score, 2):g}"
+    title = r.name if r.kind is not CellKind.MANUAL else f"{r.name} (written answer)"
+    parts = [f"<h2>{e(title)} <span class='badge {e(r.status.value)}'>{e(r.status.value)}"
+             f"</span> <small>{score} / {r.max_score:g}</small></h2>",
+             f"<p class='msg'>{e(r.message)}</p>"]
+    if r.kind is CellKind.FUNCTION and r.cases:
+        parts += _visible_html([c for c in r.cases if c.visible])
+        parts += _hidden_html([c for c in r.cases if not c.visible], reveal)
+    elif r.kind is CellKind.CHOICE and reveal and r.cases and r.cases[0].verdict is not Verdict.PASS:
+        parts.append("<p class='note'>See the model answer in the released solutions.</p>")
+    return "\n".join(parts + _outputs(r))
+
+
+def _visible_html(visible: list[CaseRecord]) -> list[str]:
+    if not visible:
+        return []
+    parts = ["<table><tr><th>visible case</th><th>input</th><th>expected</th>"
+             "<th>your answer</th><th>result</th></tr>"]
+    parts += [_case_row(c) for c in visible] + ["</table>"]
+    return parts + [_plot(c) for c in visible if c.verdict is not Verdict.PASS and _plottable(c)]
+
+
+def _hidden_html(hidden: list[CaseRecord], reveal: bool) -> list[str]:
+    if not hidden:
+        return []
+    failed = [c for c in hidden if c.verdict is not Verdict.PASS]
+    how: dict[str, int] = {}
+    for c in failed:
+        how[VERDICT_WORDS[c.verdict]] = how.get(VERDICT_WORDS[c.verdict], 0) + 1
+    line = f"Hidden cases: {len(hidden) - len(failed)} of {len(hidden)} passed"
+    if how:
+        line += " (" + ", ".join(f"{n} {k}" for k, n in sorted(how.items(),
+                                                               key=lambda x: -x[1])) + ")"
+    parts = [f"<p>{e(line)}.</p>"]
+    if reveal and failed:
+        parts.append("<table><tr><th>failing hidden case</th><th>input</th><th>expected</th>"
+                     "<th>your answer</th><th>result</th></tr>")
+        parts += [_case_row(c) for c in failed[:REVEAL_ROWS]] + ["</table>"]
+        if len(failed) > REVEAL_ROWS:
+            parts.append(f"<p class='note'>… and {len(failed) - REVEAL_ROWS} more.</p>")
+        parts += [_plot(c) for c in failed[:3] if _plottable(c)]
+    return parts
+
+
+def _outputs(r: CellResult) -> list[str]:
+    parts = []
+    if r.code.strip():
+        what = "your answer" if r.kind is CellKind.MANUAL else "your code, as graded"
+        parts.append(f"<details class='code'><summary>{what}</summary>"
+                     f"<pre>{e(r.code[:CODE_CHARS])}</pre></details>")
+    if r.printed.strip():
+        parts.append("<details><summary>printed output (not graded)</summary>"
+                     f"<pre>{e(r.printed[:PRINTED_CHARS])}</pre></details>")
+    return parts
+
+
+def _case_row(c: CaseRecord) -> str:
+    args = ", ".join([value_text(a) for a in c.args]
+                     + [f"{k}={value_text(v)}" for k, v in c.kwargs.items()])
+    expected = f"raises {c.raises}" if c.raises else value_text(c.expected)
+    if c.raises and c.verdict is Verdict.PASS:
+        received = f"raised {c.raises}"
+    elif c.verdict in (Verdict.PASS, Verdict.WRONG_VALUE, Verdict.WRONG_SHAPE):
+        received = value_text(c.received)
+    else:
+        received = "–"
+    res = ("<span class='pass'>passed</span>" if c.verdict is Verdict.PASS else
+           f"<span class='fail'>{e(c.reason or VERDICT_WORDS[c.verdict])}</span>")
+    return (f"<tr><td>{e(c.label or f'case {c.index + 1}')}</td><td><pre>{e(args)}</pre></td>"
+            f"<td><pre>{e(expected)}</pre></td><td><pre>{e(received)}</pre></td>"
+            f"<td>{res}</td></tr>")
+
+
+# --------------------------------------------------------------------------------------------
+# geometric answers: two curves, two polygons, two meshes' slices
+
+
+def _as_points(v) -> np.ndarray | None:
+    """An ``(m, 2)`` float array of points (homogeneous points divided by ``w``)."""
+    v = plot_data(v)
+    if not isinstance(v, np.ndarray) or v.ndim != 2 or v.dtype.kind != "f" or len(v) < 2:
+        return None
+    if v.shape[1] == 4:
+        w = v[:, 3:4]
+        return None if np.any(np.abs(w) < 1e-12) else v[:, :2] / w
+    return v[:, :2] if v.shape[1] in (2, 3) else None
+
+
+def _mesh_slice(v) -> list[np.ndarray] | None:
+    """Segments where a mesh ``(verts, faces)`` meets the plane through its middle (z)."""
+    if not (isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], np.ndarray)
+            and isinstance(v[1], np.ndarray)):
+        return None
+    verts, faces = v
+    if verts.ndim != 2 or verts.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3 \
+            or len(verts) == 0 or len(faces) == 0 or faces.dtype.kind not in "iuf":
+        return None
+    faces = faces.astype(int)
+    if faces.min() < 0 or faces.max() >= len(verts):
+        return None
+    z0 = 0.5 * (verts[:, 2].min() + verts[:, 2].max()) + 1e-9
+    segs = []
+    for tri in verts[faces[:2000]]:
+        d = tri[:, 2] - z0
+        pts = [tri[i, :2] + d[i] / (d[i] - d[j]) * (tri[j, :2] - tri[i, :2])
+               for i, j in ((0, 1), (1, 2), (2, 0)) if (d[i] < 0) != (d[j] < 0)]
+        if len(pts) == 2:
+            segs.append(np.array(pts))
+    return segs
+
+
+def _plottable(c: CaseRecord) -> bool:
+    if c.raises or c.expected is None:
+        return False
+    pts = _as_points(c.expected)
+    return (pts is not None and len(pts) >= 3) or _mesh_slice(c.expected) is not None
+
+
+def _plot(c: CaseRecord) -> str:
+    """An inline SVG of the expected (blue) and received (red, dashed) answers."""
+    e_pts, r_pts = _as_points(c.expected), _as_points(c.received)
+    if e_pts is not None:
+        closed = plot_data(c.expected).shape[-1] == 4
+        what = "polygon (x/w, y/w)" if closed else "curve (first two coordinates)"
+        return svg_lines([e_pts], [r_pts] if r_pts is not None else [], closed, c.label, what)
+    return svg_lines(_mesh_slice(c.expected) or [], _mesh_slice(c.received) or [], False,
+                     c.label, "mesh, sliced through the middle plane z = const")

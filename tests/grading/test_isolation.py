@@ -1,0 +1,704 @@
+"""The OS-level grading sandbox (``autograder.isolation``) against the attacks that defeated
+the Python-level one: each attack with the exact outcome kinds it must get, and the grader's
+side checked (files unchanged, no process left, memory bounded, other jobs unaffected)."""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from autograder.isolation import (CaseInput, IsolationUnavailable, Limits, Mode, NameJob,
+                                  NotebookJob, probe, run_notebook)
+from autograder.isolation import bwrap, child, identity
+from autograder.model import OutcomeKind as K
+
+pytestmark = pytest.mark.xdist_group("isolation")
+
+REPO = Path(__file__).resolve().parents[2]
+FAST = Limits(case_timeout=2.0, load_timeout=10.0)
+SETUP = "import numpy as np\n"
+
+
+@pytest.fixture(scope="module")
+def mode():
+    try:
+        return probe()
+    except IsolationUnavailable as exc:
+        pytest.skip(str(exc))
+
+
+def fn(name: str, source: str, cases=((),), cap: int = 1_000_000, kind: str = "function"):
+    """A NameJob whose one cell is ``source``; ``cases`` are tuples of positional args."""
+    return NameJob(name, kind, [(f"{name}-cell", textwrap.dedent(source))],
+                   [CaseInput(tuple(a), {}, cap) for a in cases])
+
+
+def run(mode, *names, limits=FAST, setup=SETUP, job_id="t"):
+    return run_notebook(NotebookJob(job_id, setup, list(names)), limits, mode)
+
+
+def kinds(name_run):
+    return [o.kind for o in name_run.outcomes]
+
+
+def processes_left(uid: int) -> list[int]:
+    """Live processes of a finished job's ``uid``, checked while holding its lock (so another
+    grading run on this machine cannot be using that uid meanwhile)."""
+    if not bwrap.privileged():
+        return []
+    import fcntl
+
+    fd = os.open(os.path.join(identity.LOCK_DIR, f"{uid}.lock"), os.O_RDWR)
+    try:
+        for _ in range(600):
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                return identity.uid_processes(uid)
+            except BlockingIOError:   # reused already by another job: wait for its end
+                time.sleep(0.1)
+        raise AssertionError(f"uid {uid} stayed busy")
+    finally:
+        os.close(fd)
+
+
+# ------------------------------------------------------------------------------------------
+# plain behaviour
+
+
+def test_values_prints_notes_and_undefined_names(mode):
+    values = fn("values", """
+        def values(k):
+            print("case", k)
+            return [np.arange(3, dtype=np.int16), np.array([[1.5, -2.0]], dtype=">f8"),
+                    np.array([True, False]), np.array([1 + 2j], dtype=np.complex64),
+                    (None, True, 7, 2.5, 3 - 4j, "text"), {"k": np.uint8(200)}][k]
+        """, cases=[(k,) for k in range(6)])
+    choice = NameJob("answer", "choice", [("c1", "answer = None\n")], [CaseInput((), {})])
+    broken = NameJob("later", "function",
+                     [("b1", "undefined_name\n"), ("b2", "import sys\nsys.exit(3)\n"),
+                      ("b3", "def later():\n    return 1\n")], [CaseInput((), {})])
+    missing = fn("missing", "x = 1\n")
+    runs = run(mode, values, choice, broken, missing)
+
+    got = [o.value for o in runs["values"].outcomes]
+    assert kinds(runs["values"]) == [K.RETURNED] * 6
+    assert got[0].dtype == np.int16 and got[0].tolist() == [0, 1, 2]
+    np.testing.assert_array_equal(got[1], [[1.5, -2.0]])
+    assert got[2].dtype == np.bool_ and got[3].dtype == np.complex64
+    assert got[3][0] == 1 + 2j
+    assert got[4] == (None, True, 7, 2.5, 3 - 4j, "text")
+    assert got[5] == {"k": 200}
+    assert [o.printed for o in runs["values"].outcomes] == [f"case {k}\n" for k in range(6)]
+
+    assert kinds(runs["answer"]) == [K.RETURNED] and runs["answer"].outcomes[0].value is None
+    notes = runs["later"].load_notes
+    assert notes[0].startswith("cell b1 raised NameError") and "sys.exit" in notes[1]
+    assert kinds(runs["later"]) == [K.RETURNED] and runs["later"].outcomes[0].value == 1
+    assert runs["missing"].defined is False and kinds(runs["missing"]) == [K.NOT_RUN]
+
+
+def test_objects_that_are_not_plain_data_are_rejected(mode):
+    odd = fn("odd", """
+        class Foo:
+            def __eq__(self, other):
+                return True
+        def odd(k):
+            return [Foo(), np.matrix([[1.0]]), np.array(["a"]), np.array([1], dtype=object),
+                    {1: 2}, [[[[[[[[[[1]]]]]]]]]], {1, 2}, 10 ** 5000][k]
+        """, cases=[(k,) for k in range(8)])
+    runs = run(mode, odd)["odd"]
+    assert kinds(runs) == [K.REJECTED] * 8
+    messages = [o.message for o in runs.outcomes]
+    assert messages[0] == "returned a Foo, not plain numbers"
+    assert messages[1] == "returned a matrix, not plain numbers"
+    assert "dtype <U1" in messages[2] and "dtype object" in messages[3]
+    assert "keys" in messages[4] and "deep" in messages[5] and "a set" in messages[6]
+    assert "bits" in messages[7]
+
+
+# ------------------------------------------------------------------------------------------
+# files: nothing of the course, the grader or other students is there
+
+
+ATTACK_FILES = """
+import ctypes, glob, os
+
+def attack(paths, out_dir):
+    # raw memory writes: full Python power is assumed, nothing inside the process is a guard
+    a = np.zeros(4)
+    ctypes.memmove(a.__array_interface__["data"][0], ctypes.c_char_p(b"\\x01" * 32), 32)
+    found = {"raw-write": bool(a.any())}
+    for key, path in paths.items():
+        try:
+            with open(path, "rb") as f:
+                found[key] = f.read(64).decode("latin-1")
+        except OSError as exc:
+            found[key] = type(exc).__name__
+    try:
+        os.symlink(paths["secret"], "/tmp/link")
+        open("/tmp/link").read()
+        found["symlink"] = "read"
+    except OSError as exc:
+        found["symlink"] = type(exc).__name__
+    try:
+        root = os.open("/", os.O_RDONLY)
+        fd = os.open(paths["secret"].lstrip("/"), os.O_RDONLY, dir_fd=root)
+        found["dir_fd"] = os.read(fd, 64).decode("latin-1")
+    except OSError as exc:
+        found["dir_fd"] = type(exc).__name__
+    try:
+        with open(os.path.join(out_dir, "planted.txt"), "w") as f:
+            f.write("x")
+        found["write"] = "written"
+    except OSError as exc:
+        found["write"] = type(exc).__name__
+    found["glob"] = sorted(p for top in ("/sandbox", "/root", "/tmp", "/job")
+                           for p in glob.glob(top + "/**/*", recursive=True)
+                           if p.endswith((".ipynb", ".db")) or "autograder" in p
+                           or ("course_lib" in p and p.endswith(".py")))
+    found["root"] = sorted(os.listdir("/"))
+    found["site"] = sorted(os.listdir("/sandbox/site"))
+    return found
+"""
+
+
+def test_files_of_the_course_and_other_students_are_absent(mode, tmp_path):
+    secret = tmp_path / "secret.txt"
+    secret.write_text("the course secret")
+    other = tmp_path / "students" / "bob" / "q1_imaging.ipynb"
+    other.parent.mkdir(parents=True)
+    other.write_text("bob's answers")
+    out_dir = tmp_path / "outputs"
+    out_dir.mkdir()
+    notebook = sorted((REPO / "notebooks").glob("q*.ipynb"))[0]
+    paths = {"notebook": str(notebook), "course_lib": str(REPO / "course_lib" / "shading.py"),
+             "secret": str(secret), "other": str(other),
+             "autograder": str(REPO / "autograder" / "isolation" / "runner.py"),
+             "passwd": "/etc/shadow", "venv": str(Path(sys.prefix) / "pyvenv.cfg")}
+    before = {p: Path(p).read_bytes() for p in (secret, other, notebook)}
+    job = fn("attack", ATTACK_FILES, cases=[(paths, str(out_dir))])
+    outcome = run(mode, job, limits=Limits(case_timeout=30.0))["attack"].outcomes[0]
+    assert outcome.kind is K.RETURNED, outcome
+    found = outcome.value
+
+    assert found["raw-write"] is True
+    for key in (*paths, "symlink", "dir_fd"):
+        assert found[key] in ("FileNotFoundError", "PermissionError"), (key, found[key])
+    assert found["write"] in ("FileNotFoundError", "PermissionError", "OSError")
+    assert found["glob"] == ["/sandbox/site/course_lib/__init__.py",
+                             "/sandbox/site/course_lib/marching_cubes.py"]
+    assert set(found["root"]) <= {"bin", "dev", "job", "lib", "lib64", "proc", "root",
+                                  "sandbox", "sbin", "tmp", "usr"}
+    assert set(found["site"]) <= {"course_lib", "numpy", "numpy.libs"}
+    assert {p: Path(p).read_bytes() for p in before} == before
+    assert list(out_dir.iterdir()) == []
+
+
+def test_identity_no_capabilities_and_distinct_uids(mode):
+    probe_src = """
+        import os, time
+        def ident():
+            time.sleep(1.0)
+            status = dict(l.split(":\\t", 1) for l in open("/proc/self/status").read().splitlines())
+            try:   # the supervisor (PID 1) holds the channel: its descriptors are out of reach
+                reach = os.listdir("/proc/1/fd")
+            except OSError as exc:
+                reach = type(exc).__name__
+            return (os.getuid(), os.getgid(), os.getgroups(), status["NoNewPrivs"].strip(),
+                    int(status["CapEff"], 16), int(status["CapBnd"], 16), int(status["CapPrm"], 16),
+                    reach)
+        """
+    results = {}
+
+    def one(tag):
+        results[tag] = run(mode, fn("ident", probe_src), job_id=tag)["ident"].outcomes[0]
+
+    threads = [threading.Thread(target=one, args=(t,)) for t in ("a", "b")]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    (uid_a, gid_a, groups, nnp, cap_eff, cap_bnd, cap_prm, reach), other = (
+        results["a"].value, results["b"].value)
+    assert reach == "PermissionError"
+    assert uid_a != 0 and gid_a != 0 and uid_a != other[0] and groups == []
+    if bwrap.privileged():
+        assert identity.UID_BASE <= uid_a < identity.UID_BASE + identity.UID_COUNT
+    assert nnp == "1" and cap_eff == 0 and cap_prm == 0 and cap_bnd == 0
+
+
+# ------------------------------------------------------------------------------------------
+# processes, network
+
+
+def test_processes_cannot_outlive_the_job_or_reach_another_job(mode):
+    evil = fn("evil", """
+        import os, signal, time
+        def evil(k):
+            if k == 0:
+                if os.fork() == 0:
+                    os.setsid()
+                    if os.fork() == 0:
+                        while True:
+                            try:
+                                os.kill(-1, signal.SIGKILL)
+                            except OSError:
+                                pass
+                            time.sleep(0.05)
+                    os._exit(0)
+                time.sleep(1.0)
+            return (k, os.getuid())
+        """, cases=[(0,), (1,), (2,)])
+    calm = fn("calm", """
+        import time, os
+        def calm(x):
+            time.sleep(0.3)
+            return x * 2.0, os.getuid()
+        """, cases=[(float(k),) for k in range(8)])
+    results = {}
+    thread = threading.Thread(target=lambda: results.update(run(mode, calm, job_id="calm")))
+    thread.start()
+    runs = run(mode, evil, job_id="evil")
+    thread.join()
+
+    # the grandchild kills the worker (and holds its pipe open): the supervisor sees it die
+    assert kinds(runs["evil"])[0] is K.CRASHED
+    assert "SIGKILL" in runs["evil"].outcomes[0].message
+    assert kinds(runs["evil"])[1:] == [K.RETURNED, K.RETURNED]
+    evil_uid = runs["evil"].outcomes[1].value[1]
+    assert kinds(results["calm"]) == [K.RETURNED] * 8
+    assert [o.value[0] for o in results["calm"].outcomes] == [2.0 * k for k in range(8)]
+    assert results["calm"].outcomes[0].value[1] != evil_uid
+    assert processes_left(evil_uid) == []
+
+
+def test_fork_bomb_is_contained_and_cleared(mode):
+    bomb = fn("bomb", """
+        import os
+        def bomb(k):
+            if k == 0:
+                while True:
+                    try:
+                        os.fork()
+                    except OSError:
+                        pass
+            return os.getuid()
+        """, cases=[(0,), (1,)])
+    t0 = time.monotonic()
+    runs = run(mode, bomb, limits=Limits(case_timeout=2.0, pids=32))["bomb"]
+    assert kinds(runs) == [K.TIMEOUT, K.RETURNED]
+    assert time.monotonic() - t0 < 30
+    assert processes_left(runs.outcomes[1].value) == []
+
+
+def test_the_job_budget_kills_the_whole_sandbox(mode, monkeypatch):
+    from autograder.isolation import runner
+
+    monkeypatch.setattr(runner, "job_budget", lambda job, limits: 6.0)
+    sleeper = fn("sleeper", """
+        import os, time
+        def sleeper(k):
+            if os.fork() == 0:
+                os.setsid()
+                time.sleep(60)
+            time.sleep(60)
+        """, cases=[(0,), (1,)])
+    who = fn("who", "import os\ndef who():\n    return os.getuid()\n")
+    t0 = time.monotonic()
+    runs = run(mode, who, sleeper, limits=Limits(case_timeout=120.0))
+    assert time.monotonic() - t0 < 20
+    assert kinds(runs["sleeper"]) == [K.NOT_RUN, K.NOT_RUN]
+    assert runs["sleeper"].outcomes[0].message == "not run: the job's time ran out"
+    assert processes_left(runs["who"].outcomes[0].value) == []
+
+
+def test_two_grading_processes_get_distinct_uids(mode):
+    script = textwrap.dedent("""
+        from autograder.isolation import CaseInput, Limits, NameJob, NotebookJob, probe, run_notebook
+        src = "import os, time\\ndef u():\\n    time.sleep(1.5)\\n    return os.getuid()\\n"
+        job = NotebookJob("p", "", [NameJob("u", "function", [("a", src)], [CaseInput((), {})])])
+        print(run_notebook(job, Limits(), probe())["u"].outcomes[0].value)
+        """)
+    procs = [subprocess.Popen([sys.executable, "-c", script], cwd=REPO, text=True,
+                              stdout=subprocess.PIPE) for _ in range(2)]
+    uids = [int(p.communicate(timeout=120)[0].strip()) for p in procs]
+    assert len(set(uids)) == 2 and 0 not in uids
+
+
+def test_no_network_even_from_c(mode):
+    server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    server.bind(("127.0.0.1", 0))
+    server.listen(5)
+    server.settimeout(0.2)
+    port = server.getsockname()[1]
+    net = fn("net", """
+        import ctypes, socket, struct
+        def net(port):
+            libc = ctypes.CDLL(None, use_errno=True)
+            fd = libc.socket(socket.AF_INET, socket.SOCK_STREAM, 0)
+            timeout = struct.pack("ll", 1, 0)   # a SYN into a downed loopback waits: 1 s
+            libc.setsockopt(fd, socket.SOL_SOCKET, socket.SO_SNDTIMEO, timeout, len(timeout))
+            addr = struct.pack("=HH4s8x", socket.AF_INET, socket.htons(port),
+                               socket.inet_aton("127.0.0.1"))
+            rc = libc.connect(fd, ctypes.c_char_p(addr), len(addr))
+            raw = (rc, ctypes.get_errno())
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                py = "connected"
+            except OSError as exc:
+                py = type(exc).__name__
+            with open("/proc/net/dev") as f:
+                interfaces = sorted(line.split(":")[0].strip() for line in f.readlines()[2:])
+            try:   # even its own loopback is down
+                own = socket.socket()
+                own.bind(("127.0.0.1", 0))
+                own.listen(1)
+                socket.create_connection(own.getsockname(), timeout=1).close()
+                loop = "connected"
+            except OSError as exc:
+                loop = type(exc).__name__
+            return raw, py, interfaces, loop
+        """, cases=[(port,)])
+    try:
+        out = run(mode, net, limits=Limits(case_timeout=10.0))["net"].outcomes[0]
+        with pytest.raises(socket.timeout):
+            server.accept()
+    finally:
+        server.close()
+    (rc, err), py, interfaces, loop = out.value
+    assert rc == -1 and err != 0 and py != "connected"
+    assert interfaces == ["lo"]
+    if bwrap.privileged():
+        assert loop != "connected"
+
+
+# ------------------------------------------------------------------------------------------
+# the course's references are absent; its data tables are there
+
+
+def test_references_absent_tables_present(mode):
+    import course_lib.marching_cubes as real
+
+    uses = fn("uses", """
+        def uses(k):
+            if k == 0:
+                from course_lib.shading import phong
+            if k == 1:
+                from course_lib.marching_cubes import _march
+            if k == 2:
+                import skimage
+            if k == 3:
+                import shapely
+            if k == 4:
+                import autograder
+            return CORNERS, EDGES, N_TRIANGLES, TRI_TABLE
+        """, cases=[(k,) for k in range(6)])
+    importer = NameJob("imp", "function", [("i1", "import course_lib.clipping\n"),
+                                           ("i2", "def imp():\n    return 1\n")],
+                       [CaseInput((), {})])
+    setup = SETUP + "from course_lib.marching_cubes import CORNERS, EDGES, N_TRIANGLES, TRI_TABLE\n"
+    runs = run(mode, uses, importer, setup=setup)
+    assert kinds(runs["uses"]) == [K.REFERENCE_USED, K.REFERENCE_USED, K.RAISED, K.RAISED,
+                                   K.RAISED, K.RETURNED]
+    assert [o.error_type for o in runs["uses"].outcomes[2:5]] == ["ModuleNotFoundError"] * 3
+    tables = runs["uses"].outcomes[5].value
+    for got, want in zip(tables, (real.CORNERS, real.EDGES, real.N_TRIANGLES, real.TRI_TABLE)):
+        assert got.dtype == want.dtype
+        np.testing.assert_array_equal(got, want)
+    assert "course_lib.clipping" in runs["imp"].load_notes[0]
+    assert kinds(runs["imp"]) == [K.RETURNED]
+
+
+def test_every_source_notebooks_setup_cell_runs_in_the_sandbox(mode):
+    import nbformat
+
+    checked = 0
+    for path in sorted((REPO / "notebooks").glob("q*.ipynb")):
+        cells = nbformat.read(path, as_version=4).cells
+        setup = next((c.source for c in cells if c.cell_type == "code" and str(
+            c.metadata.get("nbgrader", {}).get("grade_id", "")).startswith("setup")), None)
+        if setup is None:
+            continue
+        runs = run(mode, fn("probe_np", "def probe_np():\n    return float(np.pi)\n"),
+                   setup=setup, job_id=path.stem)
+        assert runs["probe_np"].load_notes == [], (path.name, runs["probe_np"].load_notes)
+        assert runs["probe_np"].outcomes[0].value == pytest.approx(np.pi)
+        checked += 1
+    assert checked >= 1
+
+
+def test_callers_frames_hold_no_expected_value(mode):
+    spy = fn("spy", """
+        import sys
+        def spy(x):
+            seen, frame = [], sys._getframe(1)
+            while frame is not None:
+                seen.append(repr(frame.f_locals)[:100000])
+                frame = frame.f_back
+            return "\\n".join(seen)
+        """, cases=[(0.5,)])
+    text = run(mode, spy)["spy"].outcomes[0].value
+    assert "0.5" in text
+    assert "expected" not in text and "123.456" not in text
+
+
+# ------------------------------------------------------------------------------------------
+# resources: memory, scratch, time, crashes, huge results
+
+
+def test_memory_limit_holds_for_the_whole_job(mode):
+    hog = fn("hog", """
+        import os
+        def hog(k):
+            if k == 0:
+                return np.ones(3 * 2**30 // 8).sum()
+            if k == 1:
+                pids = []
+                for _ in range(3):
+                    pid = os.fork()
+                    if pid == 0:
+                        block = np.ones(500 * 2**20 // 8)
+                        os._exit(0 if block.sum() else 1)
+                    pids.append(pid)
+                return [os.waitstatus_to_exitcode(os.waitpid(p, 0)[1]) for p in pids]
+            return 42
+        """, cases=[(0,), (1,), (2,)])
+    runs = run(mode, hog, limits=Limits(case_timeout=20.0, memory_mb=1024))["hog"]
+    assert kinds(runs)[0] in (K.RAISED, K.CRASHED)
+    if bwrap.privileged():
+        first, second = runs.outcomes[0], runs.outcomes[1]
+        assert first.kind is K.CRASHED or first.error_type == "MemoryError"
+        assert second.kind is K.CRASHED or -9 in second.value
+    assert runs.outcomes[2].kind is K.RETURNED and runs.outcomes[2].value == 42
+
+
+def test_scratch_is_small_and_private(mode):
+    fill = fn("fill", """
+        import errno, os
+        def fill(k):
+            if k == 1:
+                return os.getcwd(), os.environ.get("HOME")
+            try:
+                with open("/tmp/big", "wb") as f:
+                    for _ in range(1024):
+                        f.write(b"\\0" * 2**20)
+                return "written"
+            except OSError as exc:
+                return errno.errorcode.get(exc.errno, "?")
+        """, cases=[(0,), (1,)])
+    runs = run(mode, fill)["fill"]
+    assert [o.value for o in runs.outcomes] == ["ENOSPC", ("/tmp", "/tmp")]
+
+
+def test_time_limits_and_crashes(mode):
+    slow = fn("slow", """
+        import os, time
+        def slow(k):
+            if k == 0:
+                while True:
+                    pass
+            if k == 1:
+                while True:
+                    try:
+                        time.sleep(10)
+                    except BaseException:
+                        pass
+            if k == 2:
+                os._exit(3)
+            print("case", k)
+            return k
+        """, cases=[(k,) for k in range(5)])
+    hang = fn("hang", """
+        def hang(k):
+            while True:
+                pass
+        """, cases=[(k,) for k in range(5)])
+    top = NameJob("top", "function", [("t1", "while True:\n    pass\n"),
+                                      ("t2", "def top():\n    return 'ok'\n")],
+                  [CaseInput((), {})])
+    runs = run(mode, slow, hang, top, limits=Limits(case_timeout=1.0, load_timeout=3.0))
+    assert kinds(runs["slow"]) == [K.TIMEOUT, K.TIMEOUT, K.CRASHED, K.RETURNED, K.RETURNED]
+    assert [o.value for o in runs["slow"].outcomes[3:]] == [3, 4]
+    assert runs["slow"].outcomes[4].printed == "case 4\n"
+    assert runs["slow"].launches == 3
+    assert kinds(runs["hang"]) == [K.TIMEOUT] * 3 + [K.NOT_RUN] * 2
+    assert "t1" in runs["top"].load_notes[0]
+    assert kinds(runs["top"]) == [K.RETURNED] and runs["top"].outcomes[0].value == "ok"
+
+
+GRADER_RSS = """
+import json, resource, sys
+import numpy as np
+from autograder.isolation import CaseInput, Limits, NameJob, NotebookJob, probe, run_notebook
+source = '''
+import os
+def big(k):
+    if k == 0:
+        return np.zeros(200 * 2**20 // 8)
+    if k == 1:
+        return ["x" * 2**20] * 200
+    if k == 2:   # forge a record on every descriptor it can reach: only its own pipe
+        blocked = []
+        record = b'{"t":"case","name":"big","i":2,"kind":"returned","value":"' + b"A" * 2**20
+        for fd in list(range(3, 64)) + [f"/proc/1/fd/{n}" for n in range(64)]:
+            try:
+                target = os.open(fd, os.O_WRONLY) if isinstance(fd, str) else fd
+                os.write(target, (2**31).to_bytes(4, "big") + record)
+                blocked.append("written")
+            except OSError:
+                pass
+        return blocked
+    if k == 3:   # switch off the worker's own size check: the supervisor still refuses it
+        import __main__
+        __main__.record_cap = lambda *args: 1 << 40
+        __main__.encode_value = lambda v, budget, depth=0: {"t": "list", "v": ["y" * 2**20] * 300}
+        return 0
+    return k
+'''
+job = NotebookJob("rss", "import numpy as np\\n", [NameJob("big", "function", [("c", source)],
+                  [CaseInput((k,), {}, 1024) for k in range(5)])])
+runs = run_notebook(job, Limits(case_timeout=20.0), probe())
+out = [(o.kind.value, o.value if o.kind.value == "returned" else o.message)
+       for o in runs["big"].outcomes]
+print(json.dumps({"out": out, "maxrss_kb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}))
+"""
+
+
+def test_huge_results_and_forged_records_leave_the_grader_small(mode):
+    done = subprocess.run([sys.executable, "-c", GRADER_RSS], capture_output=True, text=True,
+                          cwd=REPO, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    report = json.loads(done.stdout.strip().splitlines()[-1])
+    assert report["out"] == [["rejected", "result too large (more than 1024 bytes)"],
+                             ["rejected", "result too large (more than 1024 bytes)"],
+                             ["rejected", "result too large"],
+                             ["rejected", "result too large"], ["returned", 4]]
+    assert report["maxrss_kb"] < 2**20
+
+
+# ------------------------------------------------------------------------------------------
+# the grader's side of the channel, on forged streams
+
+
+def _stream(*chunks: bytes):
+    rfd, wfd = os.pipe()
+    writer = threading.Thread(target=lambda: ([os.write(wfd, c) for c in chunks],
+                                              os.close(wfd)))
+    writer.start()
+    return rfd, writer
+
+
+def test_reader_refuses_oversized_frames_before_reading_them():
+    rfd, writer = _stream(child.FRAME.pack(2**32 - 1) + b"{")
+    reader = child.FrameReader(rfd, frame_cap=4096, total_cap=10**9)
+    assert reader.next(time.monotonic() + 5) == ("too-large", None)
+    assert len(reader.buf) <= child.FRAME.size + 4096
+    writer.join()
+    os.close(rfd)
+
+    many = child.frame({"t": "note", "name": None, "text": "x" * 900}) * 50
+    rfd, writer = _stream(many)
+    reader = child.FrameReader(rfd, frame_cap=4096, total_cap=10_000)
+    events = []
+    while not events or events[-1] == "record":
+        events.append(reader.next(time.monotonic() + 5)[0])
+    assert events[-1] == "too-large" and reader.total <= 10_000 + 2**20
+    assert events.count("record") <= 10_000 // 900
+    writer.join()
+    os.close(rfd)
+
+
+def test_decoder_checks_sizes_before_decoding():
+    huge = {"t": "array", "dtype": "<f8", "shape": [10**6, 10**6], "v": "AAAA"}
+    with pytest.raises(child.BadValue, match="too large"):
+        child.decode_value(huge, child.Budget(1024))
+    lying = {"t": "array", "dtype": "<f8", "shape": [4], "v": "AAAA"}
+    with pytest.raises(child.BadValue, match="does not match"):
+        child.decode_value(lying, child.Budget(1024))
+    for bad in ({"t": "array", "dtype": "|O", "shape": [1], "v": "AAAA"}, {"t": "pickle"},
+                {"t": "list", "v": "abc"}, [1, 2]):
+        with pytest.raises(child.BadValue):
+            child.decode_value(bad, child.Budget(1024))
+    deep = 1
+    for _ in range(12):
+        deep = {"t": "list", "v": [deep]}
+    with pytest.raises(child.BadValue, match="deeply"):
+        child.decode_value(deep, child.Budget(1024))
+    value = np.arange(6, dtype=">i4").reshape(2, 3)
+    back = child.decode_value(child.encode_value(value, child.Budget(1024)), child.Budget(1024))
+    assert back.dtype == np.dtype("<i4") and back.tolist() == [[0, 1, 2], [3, 4, 5]]
+
+
+# ------------------------------------------------------------------------------------------
+# modes, and what a job costs
+
+
+def test_probe_says_what_to_install(monkeypatch):
+    monkeypatch.setattr(bwrap, "BWRAP", "/nonexistent/bwrap")
+    bwrap.probe.cache_clear()
+    try:
+        with pytest.raises(IsolationUnavailable, match="apt-get install bubblewrap"):
+            bwrap.probe()
+    finally:
+        bwrap.probe.cache_clear()
+
+
+NON_ROOT = """
+import sys
+sys.path[:0] = [{repo!r}, {site!r}]
+from autograder.isolation import CaseInput, Limits, NameJob, NotebookJob, probe, run_notebook
+src = "import os\\ndef u(x):\\n    return os.getuid(), os.getppid(), x * 2\\n"
+job = NotebookJob("n", "import numpy as np\\n", [NameJob("u", "function", [("a", src)],
+                                                           [CaseInput((3,), {{}})])])
+print(repr(run_notebook(job, Limits(), probe())["u"].outcomes[0].value))
+"""
+
+
+def test_without_root_user_namespaces_isolate(mode):
+    """As an ordinary user (``nobody``), with the system's Python of the same version."""
+    system_python = Path("/usr/bin/python3")
+    site = Path(np.__file__).resolve().parents[1]
+    if not bwrap.privileged() or not system_python.exists():
+        pytest.skip("needs root (to become nobody) and /usr/bin/python3")
+    version = subprocess.run([system_python, "-c", "import sys; print(sys.version_info[:2])"],
+                             capture_output=True, text=True).stdout.strip()
+    if version != str(tuple(sys.version_info[:2])):
+        pytest.skip(f"/usr/bin/python3 is {version}, NumPy here is for {sys.version_info[:2]}")
+    done = subprocess.run(
+        ["/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups",
+         system_python, "-c", NON_ROOT.format(repo=str(REPO), site=str(site))],
+        capture_output=True, text=True, timeout=120, env={"HOME": "/tmp", "PATH": "/usr/bin"})
+    if "Permission denied" in done.stderr:
+        pytest.skip("the repository or NumPy is not readable by nobody")
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "(1000, 1, 6)"   # its parent is PID 1: its own namespace
+
+
+def test_unsafe_mode_runs_the_same_child(tmp_path):
+    assert "WITHOUT" in bwrap.UNSAFE_WARNING
+    job = fn("double", "def double(x):\n    return 2 * x\n", cases=[(np.arange(3),)])
+    runs = run(Mode.UNSAFE, job)
+    np.testing.assert_array_equal(runs["double"].outcomes[0].value, [0, 2, 4])
+
+
+def test_cost_of_a_job(mode):
+    """Measured, not asserted: the cost of an empty job and of a typical one."""
+    empty = NotebookJob("empty", "", [])
+    typical = NotebookJob("typical", SETUP, [
+        fn(f"f{k}", f"def f{k}(a):\n    return np.linalg.solve(a, np.ones(len(a)))\n",
+           cases=[(np.eye(5) * (i + 1),) for i in range(10)]) for k in range(6)])
+    for job in (empty, typical):
+        t0 = time.perf_counter()
+        runs = run_notebook(job, FAST, mode)
+        print(f"{job.job_id}: {time.perf_counter() - t0:.3f} s")
+    assert all(kinds(r) == [K.RETURNED] * 10 for r in runs.values())
