@@ -1,0 +1,482 @@
+"""Similarity evidence for the class report: near-copied solution cells and pasted references.
+
+Issue 11, part 3. For every graded name (one solution cell per exercise, see EXERCISES.md) this
+module finds
+
+- pairs of students whose cells are near copies of each other once names, comments, docstrings
+  and layout are ignored, and
+- students whose cell is a near copy of the ``course_lib`` reference source of that function (a
+  pasted reference: ``inspect.getsource(REGISTRY[name].reference)``),
+
+and renders them as an HTML section with the two cells side by side, the matching lines marked.
+Everything here is a pure function of plain data (strings in, dataclasses and an HTML string
+out); it imports the standard library and NumPy only, so the report can call it after grading.
+:func:`reference_source` gives a reference's source together with the private helpers of its
+module that it calls (``course_lib`` references often delegate to one), which is what a student
+who pastes the reference has to paste.
+
+Method (MOSS-style winnowing, Schleimer, Wilkerson & Aiken, SIGMOD 2003)
+--------------------------------------------------------------------------
+1. **Normalise** (:func:`normalise`): the cell is parsed with :mod:`ast` (IPython ``%``/``!``
+   lines blanked first); the tree is written out in pre-order as one token per node (its type),
+   with every identifier the student chose (variables, parameters, function and helper names)
+   replaced by ``V``, every string by ``S``, and docstrings, bare string statements, comments,
+   type annotations and layout dropped. Attribute names (``.linalg``, ``.sum``), keyword-argument
+   names (``axis=``), Python built-ins (``float``, ``ValueError``) and numbers are kept: they are
+   what a copier rarely changes and two honest authors often choose differently. Top-level
+   ``def``/``class`` blocks are sorted by their normalised text, so re-ordered helpers give the
+   same stream.
+2. **Fingerprint** (:func:`fingerprint`): every run of ``k`` = :data:`K_GRAM` consecutive tokens
+   is hashed (a 64-bit polynomial hash of the tokens' BLAKE2 digests); winnowing keeps the
+   smallest hash of every :data:`WINDOW` consecutive ones. Any run of ``k + WINDOW - 1`` = 17
+   tokens (about two lines) shared by two cells is guaranteed to give them a common
+   fingerprint, whatever surrounds it.
+3. **Compare per graded name** (:func:`find_similar`). Two students' cells score their
+   :func:`jaccard` index (fingerprints in both / fingerprints in either). A student's cell
+   scores against the reference by :func:`containment`: the share of the reference's
+   fingerprints found in the cell, so a pasted reference with helpers or extra checks around it
+   still scores 1. The fingerprints two cells share are counted for every pair at once from
+   an inverted index (fingerprint -> cells that contain it, :func:`shared_counts`), not by
+   ``n (n - 1) / 2`` set intersections; the scores are exactly the all-pairs ones.
+
+Threshold
+---------
+Reported when the score is at least :data:`THRESHOLD` = 0.75 and both cells (student and
+reference alike) have at least :data:`MIN_TOKENS` = 80 normalised tokens. Shorter cells (about six
+lines of NumPy: a three-line ``normalize``, a basis matrix typed from the notes) are too short to
+tell: everyone who writes them correctly writes nearly the same thing. Measured on this course
+with ``k = 12``, ``WINDOW = 6``: the honest solutions written for the tests
+(``tests/grading/honest``) score at most 0.53 against the notebooks' model answers (a
+``scanline_span`` written the same textbook way), and the ``course_lib`` references are at most
+0.62 contained in either; a copy with renamed variables, re-ordered helpers and new comments,
+or a pasted reference, scores 1.0. The report is evidence for a person to read, never an
+automatic penalty.
+
+Why not a library
+-----------------
+``copydetect`` 0.5 (the MOSS-like tool on PyPI, Python and NumPy) was read and not used: it
+fingerprints files on disk and compares every test file with every reference file in a Python
+loop (125 000 pairs per graded name for 500 students, 5 million for 40 names), hashes character
+k-grams with Python's salted ``hash()`` (fingerprints change from run to run), keeps docstrings
+as string tokens, and brings Jinja2, Pygments and tqdm for a report of its own. The per-name
+inverted index, the syntax-tree normalisation and the report section need about 150 lines here.
+"""
+
+from __future__ import annotations
+
+import ast
+import builtins
+import hashlib
+import html
+import inspect
+import math
+import re
+import textwrap
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Tokens per k-gram (a token is one node of the normalised syntax tree).
+K_GRAM = 12
+#: Winnowing window: one fingerprint is kept per WINDOW consecutive k-grams.
+WINDOW = 6
+#: Reported at or above this score (:func:`jaccard` for pairs, :func:`containment` of the reference).
+THRESHOLD = 0.75
+#: Cells with fewer normalised tokens than this are too short to tell and never reported.
+MIN_TOKENS = 80
+#: Label of the ``course_lib`` reference in a :class:`Match`.
+REFERENCE = "course_lib reference"
+
+_BUILTINS = frozenset(dir(builtins))
+_MAGIC_LINE = re.compile(r"^[ \t]*[%!].*$", re.M)
+_SKIPPED_FIELDS = frozenset({"ctx", "type_comment", "annotation", "returns", "kind",
+                             "type_params"})
+_DEFINITIONS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
+
+
+@dataclass(frozen=True)
+class Fingerprint:
+    """The winnowed fingerprints of one cell (Q-independent; see the module docstring)."""
+
+    tokens: int              #: normalised length (syntax-tree nodes kept)
+    hashes: np.ndarray       #: uint64 hash of every k-gram, in order
+    lines: np.ndarray        #: (n_kgrams, 2) first and last source line of each k-gram
+    prints: np.ndarray       #: winnowed hashes, sorted and unique
+
+
+@dataclass(frozen=True)
+class Match:
+    """One reported pair: two cells of the same graded name, or a cell and the reference."""
+
+    name: str                #: the graded name (the function the cells define)
+    left: str                #: student id
+    right: str               #: student id, or :data:`REFERENCE`
+    score: float             #: :func:`jaccard` of a pair, :func:`containment` of the reference
+    left_source: str
+    right_source: str
+    left_lines: frozenset[int]    #: 1-based lines of ``left_source`` in shared k-grams
+    right_lines: frozenset[int]
+
+    @property
+    def is_reference(self) -> bool:
+        return self.right == REFERENCE
+
+
+# ============================================================================================
+# normalising
+
+
+def normalise(source: str) -> list[tuple[str, int]]:
+    """The normalised token stream of a cell: ``[(token, source line), ...]``.
+
+    Identifiers become ``V`` and strings ``S``; docstrings, comments, annotations and layout go;
+    top-level definitions are sorted by their normalised text. A cell that does not parse
+    (even after its IPython ``%``/``!`` lines are blanked) gives ``[]``.
+    """
+    if not isinstance(source, str):
+        raise ValueError(f"source must be a string, got {type(source).__name__}")
+    try:
+        tree = ast.parse(_MAGIC_LINE.sub("", source))
+    except (SyntaxError, ValueError):   # ValueError: a null byte in the source
+        return []
+    others, definitions = [], []
+    for stmt in tree.body:
+        tokens = []
+        _emit(stmt, getattr(stmt, "lineno", 1), tokens)
+        (definitions if isinstance(stmt, _DEFINITIONS) else others).append(tokens)
+    definitions.sort(key=lambda toks: [t for t, _ in toks])
+    return [tok for block in others + definitions for tok in block]
+
+
+def _emit(node: ast.AST, line: int, out: list[tuple[str, int]]) -> None:
+    """Append the pre-order tokens of ``node`` to ``out`` (see :func:`normalise`)."""
+    if _is_bare_string(node):
+        return
+    line = getattr(node, "lineno", line)
+    out.append((type(node).__name__, line))
+    for field, value in ast.iter_fields(node):
+        if field in _SKIPPED_FIELDS:
+            continue
+        if isinstance(value, ast.AST):
+            _emit(value, line, out)
+        elif isinstance(value, list):
+            for item in value:
+                if isinstance(item, ast.AST):
+                    _emit(item, line, out)
+        elif value is not None:
+            out.append((_leaf(node, field, value), line))
+
+
+def _is_bare_string(node: ast.AST) -> bool:
+    """A docstring or any other string used as a statement (it does nothing)."""
+    return (isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant)
+            and isinstance(node.value.value, (str, bytes, type(Ellipsis))))
+
+
+def _leaf(node: ast.AST, field: str, value) -> str:
+    """The token of a plain field: names chosen by the student become ``V``."""
+    if isinstance(node, (ast.Attribute, ast.keyword, ast.ImportFrom)) \
+            or (isinstance(node, ast.alias) and field == "name"):
+        return f"{field}={value}"
+    if isinstance(node, ast.Name):
+        return value if value in _BUILTINS else "V"
+    if isinstance(node, ast.Constant):
+        return "S" if isinstance(value, (str, bytes)) else repr(value)
+    if isinstance(value, str):          # def/class names, parameters, alias.asname, globals
+        return "V"
+    return repr(value)
+
+
+def reference_source(function) -> str:
+    """The source of ``function`` followed by the private (``_name``) functions of its module
+    that it calls, transitively: what pasting the reference into a cell takes.
+
+    Raises
+    ------
+    ValueError
+        If ``function`` is not a Python function whose source is available.
+    """
+    if not inspect.isfunction(function):
+        raise ValueError(f"function must be a Python function, got {type(function).__name__}")
+    module = inspect.getmodule(function)
+    try:
+        parts = [textwrap.dedent(inspect.getsource(function))]
+    except (OSError, TypeError) as exc:
+        raise ValueError(f"no source for {function.__qualname__}: {exc}") from None
+    seen = {function.__name__}
+    for part in parts:                  # grows while it is read: helpers of helpers
+        for name in sorted(set(re.findall(r"\b(_\w+)\s*\(", part)) - seen):
+            helper = getattr(module, name, None)
+            if inspect.isfunction(helper) and inspect.getmodule(helper) is module:
+                seen.add(name)
+                parts.append(textwrap.dedent(inspect.getsource(helper)))
+    return "\n\n".join(parts)
+
+
+# ============================================================================================
+# fingerprints
+
+
+_TOKEN_IDS: dict[str, int] = {}
+
+
+def _token_id(token: str) -> int:
+    """A stable 64-bit number per token (BLAKE2b, so runs and machines agree)."""
+    found = _TOKEN_IDS.get(token)
+    if found is None:
+        found = int.from_bytes(hashlib.blake2b(token.encode(), digest_size=8).digest(), "little")
+        _TOKEN_IDS[token] = found
+    return found
+
+
+def fingerprint(source: str, k: int = K_GRAM, window: int = WINDOW) -> Fingerprint | None:
+    """Winnowed k-gram fingerprints of one cell, or ``None`` when it has fewer than ``k +
+    window - 1`` normalised tokens (nothing to winnow) or does not parse."""
+    _check_positive_int(k=k, window=window)
+    tokens = normalise(source)
+    if len(tokens) < k + window - 1:
+        return None
+    ids = np.fromiter((_token_id(t) for t, _ in tokens), dtype=np.uint64, count=len(tokens))
+    lines = np.fromiter((n for _, n in tokens), dtype=np.int64, count=len(tokens))
+    powers = np.uint64(1_000_003) ** np.arange(k - 1, -1, -1, dtype=np.uint64)
+    with np.errstate(over="ignore"):   # the hash is modulo 2**64 on purpose
+        grams = np.lib.stride_tricks.sliding_window_view(ids, k)
+        hashes = (grams * powers).sum(axis=1, dtype=np.uint64)
+    span = np.lib.stride_tricks.sliding_window_view(lines, k)
+    kept = np.lib.stride_tricks.sliding_window_view(hashes, window).argmin(axis=1)
+    kept += np.arange(len(kept))
+    return Fingerprint(tokens=len(tokens), hashes=hashes,
+                       lines=np.stack([span.min(axis=1), span.max(axis=1)], axis=1),
+                       prints=np.unique(hashes[kept]))
+
+
+def jaccard(a: Fingerprint, b: Fingerprint) -> float:
+    """Fingerprints the two cells share over the fingerprints either has, in ``[0, 1]``: the
+    score of a pair of students."""
+    shared = np.intersect1d(a.prints, b.prints, assume_unique=True).size
+    return shared / (a.prints.size + b.prints.size - shared)
+
+
+def containment(part: Fingerprint, whole: Fingerprint) -> float:
+    """Share of ``part``'s fingerprints also in ``whole``, in ``[0, 1]``: the score of a cell
+    against the reference (``part``), so a pasted reference scores 1 whatever is around it."""
+    return np.intersect1d(part.prints, whole.prints, assume_unique=True).size / part.prints.size
+
+
+def shared_lines(a: Fingerprint, b: Fingerprint) -> tuple[frozenset[int], frozenset[int]]:
+    """Source lines of ``a`` and of ``b`` covered by a k-gram the other cell also has."""
+    return _covered(a, np.isin(a.hashes, b.hashes)), _covered(b, np.isin(b.hashes, a.hashes))
+
+
+def _covered(fp: Fingerprint, mask: np.ndarray) -> frozenset[int]:
+    lines = set()
+    for first, last in fp.lines[mask]:
+        lines.update(range(int(first), int(last) + 1))
+    return frozenset(lines)
+
+
+def common_limit(n_cells: int) -> int:
+    """Cells of one name above which a fingerprint counts as common code in
+    :func:`shared_counts` (counted by a matrix product instead of pair by pair): 10 % of the
+    cells, at least 10."""
+    return max(10, math.ceil(0.1 * n_cells))
+
+
+def _check_positive_int(**values) -> None:
+    for name, value in values.items():
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise ValueError(f"{name} must be a positive integer, got {value!r}")
+
+
+# ============================================================================================
+# comparing
+
+
+def shared_counts(prints: list[np.ndarray], limit: int) -> np.ndarray:
+    """``counts[i, j]``, ``i < j``: fingerprints that sets ``i`` and ``j`` share (0 elsewhere).
+
+    An inverted index (fingerprint -> sets holding it), never ``n (n - 1) / 2`` set
+    intersections: a fingerprint held by at most ``limit`` sets adds one to each of its pairs
+    (enumerated with NumPy, grouped by how many sets hold it); the few held by more, code most
+    of the class writes alike, become columns of a 0/1 matrix ``D`` whose product ``D @ D.T``
+    counts them for every pair at once.
+    """
+    n = len(prints)
+    counts = np.zeros((n, n), dtype=np.int64)
+    sizes = np.fromiter((p.size for p in prints), dtype=np.int64, count=n)
+    if n < 2 or not sizes.any():
+        return counts
+    owner = np.repeat(np.arange(n), sizes)
+    every = np.concatenate(prints)
+    order = np.argsort(every, kind="stable")     # owners stay ascending within a fingerprint
+    every, owner = every[order], owner[order]
+    starts = np.flatnonzero(np.r_[True, every[1:] != every[:-1]])
+    held = np.diff(np.r_[starts, every.size])
+    for size in np.unique(held[(held > 1) & (held <= limit)]):
+        groups = owner[starts[held == size][:, None] + np.arange(size)]   # (fingerprints, size)
+        i, j = np.triu_indices(size, 1)
+        np.add.at(counts, (groups[:, i].ravel(), groups[:, j].ravel()), 1)
+    common = held > limit
+    if common.any():
+        column = np.repeat(np.cumsum(common) - 1, held)
+        in_common = np.repeat(common, held)
+        dense = np.zeros((n, int(common.sum())), dtype=np.float32)
+        dense[owner[in_common], column[in_common]] = 1.0
+        counts += np.triu(np.rint(dense @ dense.T).astype(np.int64), 1)
+    return counts
+
+
+def find_similar(cells: Mapping[str, Mapping[str, str]], references: Mapping[str, str] | None = None,
+                 *, threshold: float = THRESHOLD, min_tokens: int = MIN_TOKENS,
+                 k: int = K_GRAM, window: int = WINDOW) -> list[Match]:
+    """Near-copied cells between students, and cells that copy the reference (issue 11.3).
+
+    Parameters
+    ----------
+    cells : mapping
+        ``{student: {graded name: solution-cell source}}``; names are compared only with the
+        same name.
+    references : mapping, optional
+        ``{graded name: course_lib reference source}``.
+    threshold : float
+        Report at or above this score (default :data:`THRESHOLD`), in ``(0, 1]``.
+    min_tokens : int
+        Ignore cells with fewer normalised tokens (default :data:`MIN_TOKENS`).
+    k, window : int
+        k-gram length and winnowing window.
+
+    Returns
+    -------
+    list of Match
+        Highest score first; reference matches before pairs at equal score.
+    """
+    if not isinstance(cells, Mapping):
+        raise ValueError(f"cells must map student -> {{name: source}}, got {type(cells).__name__}")
+    if not 0 < threshold <= 1:
+        raise ValueError(f"threshold must be in (0, 1], got {threshold!r}")
+    _check_positive_int(min_tokens=min_tokens, k=k, window=window)
+    references = references or {}
+    cache: dict[str, Fingerprint | None] = {}
+    found: list[Match] = []
+    for name, by_student in _by_name(cells).items():
+        prints = {}
+        for student, source in by_student.items():
+            if source not in cache:
+                cache[source] = fingerprint(source, k, window)
+            fp = cache[source]
+            if fp is not None and fp.tokens >= min_tokens:
+                prints[student] = fp
+        ref = references.get(name)
+        ref_fp = fingerprint(ref, k, window) if isinstance(ref, str) else None
+        found += _pairs_of(name, prints, by_student, threshold)
+        if ref_fp is not None and ref_fp.tokens >= min_tokens:
+            found += _reference_matches(name, prints, by_student, ref, ref_fp, threshold)
+    found.sort(key=lambda m: (-m.score, not m.is_reference, m.name, m.left, m.right))
+    return found
+
+
+def _by_name(cells: Mapping[str, Mapping[str, str]]) -> dict[str, dict[str, str]]:
+    """``{name: {student: source}}`` from ``{student: {name: source}}``, students sorted."""
+    out: dict[str, dict[str, str]] = {}
+    for student in sorted(cells):
+        per = cells[student]
+        if not isinstance(per, Mapping):
+            raise ValueError(f"cells[{student!r}] must map graded name -> source")
+        for name, source in per.items():
+            if isinstance(source, str) and source.strip():
+                out.setdefault(name, {})[student] = source
+    return out
+
+
+def _pairs_of(name: str, prints: dict[str, Fingerprint], sources: dict[str, str],
+              threshold: float) -> list[Match]:
+    students = list(prints)
+    sizes = np.array([prints[s].prints.size for s in students], dtype=np.int64)
+    counts = shared_counts([prints[s].prints for s in students], common_limit(len(students)))
+    rows, cols = np.nonzero(counts)
+    shared = counts[rows, cols]
+    scores = shared / (sizes[rows] + sizes[cols] - shared)
+    found = []
+    for i, j, score in zip(rows[scores >= threshold], cols[scores >= threshold],
+                           scores[scores >= threshold]):
+        a, b = students[i], students[j]
+        left, right = shared_lines(prints[a], prints[b])
+        found.append(Match(name, a, b, float(score), sources[a], sources[b], left, right))
+    return found
+
+
+def _reference_matches(name: str, prints: dict[str, Fingerprint], sources: dict[str, str],
+                       ref_source: str, ref: Fingerprint, threshold: float) -> list[Match]:
+    found = []
+    for student, fp in prints.items():
+        score = containment(ref, fp)
+        if score >= threshold:
+            left, right = shared_lines(fp, ref)
+            found.append(Match(name, student, REFERENCE, score, sources[student], ref_source,
+                               left, right))
+    return found
+
+
+# ============================================================================================
+# the report's section
+
+
+_SECTION_STYLE = (".simil pre{margin:0;font-size:.8em;white-space:pre-wrap;word-break:break-word}"
+                  ".simil mark{background:#ffe082}.simil td{width:50%}")
+
+
+def render_section(matches: Iterable[Match], *, threshold: float = THRESHOLD,
+                   min_tokens: int = MIN_TOKENS, limit: int = 50) -> str:
+    """The report's "Similar solutions" section: an HTML fragment (no scripts, no network).
+
+    Pasted references first, then pairs of students; each with its score and the two cells
+    side by side, escaped, lines inside shared k-grams marked. At most ``limit`` matches are
+    shown in full; the rest are listed by name and score.
+    """
+    matches = list(matches)
+    _check_positive_int(limit=limit)
+    refs = [m for m in matches if m.is_reference]
+    pairs = [m for m in matches if not m.is_reference]
+    out = [f"<section class='simil'><style>{_SECTION_STYLE}</style>",
+           f"<h2>Similar solutions ({len(refs)} like the reference, {len(pairs)} pairs)</h2>",
+           f"<p class='note'>Solution cells compared per graded function after normalising names, "
+           f"comments, docstrings and layout (k-gram winnowing). Listed when at least "
+           f"{threshold:.0%} of the shorter cell's fingerprints are in the other; cells under "
+           f"{min_tokens} normalised tokens are too short to tell and never listed. This is "
+           f"evidence to read, not a verdict: marked lines are the shared code.</p>"]
+    if not matches:
+        out.append("<p>None above the threshold.</p>")
+    budget = limit
+    for title, group in (("Like the course_lib reference", refs), ("Pairs of students", pairs)):
+        if group:
+            out.append(f"<h3>{title}</h3>")
+            out += [_match_html(m) for m in group[:budget]]
+            out += _overflow_html(group[budget:])
+            budget = max(budget - len(group), 0)
+    out.append("</section>")
+    return "\n".join(out)
+
+
+def _match_html(m: Match) -> str:
+    return (f"<details open><summary><b>{_e(m.name)}</b>: {_e(m.left)} and {_e(m.right)}, "
+            f"{m.score:.0%} shared</summary><table><tr><th>{_e(m.left)}</th><th>{_e(m.right)}"
+            f"</th></tr><tr><td>{_code_html(m.left_source, m.left_lines)}</td>"
+            f"<td>{_code_html(m.right_source, m.right_lines)}</td></tr></table></details>")
+
+
+def _overflow_html(rest: list[Match]) -> list[str]:
+    if not rest:
+        return []
+    items = ", ".join(f"{_e(m.name)}: {_e(m.left)}/{_e(m.right)} {m.score:.0%}" for m in rest)
+    return [f"<p class='note'>Also above the threshold: {items}.</p>"]
+
+
+def _code_html(source: str, marked: frozenset[int]) -> str:
+    rows = [f"<mark>{_e(text)}</mark>" if number in marked else _e(text)
+            for number, text in enumerate(source.splitlines(), start=1)]
+    return "<pre>" + "\n".join(rows) + "</pre>"
+
+
+def _e(text) -> str:
+    return html.escape(str(text), quote=True)
