@@ -66,6 +66,8 @@ from __future__ import annotations
 
 import ast
 import builtins
+import concurrent.futures
+import functools
 import hashlib
 import html
 import inspect
@@ -93,16 +95,17 @@ _MAGIC_LINE = re.compile(r"^[ \t]*[%!].*$", re.M)
 _SKIPPED_FIELDS = frozenset({"ctx", "type_comment", "annotation", "returns", "kind",
                              "type_params"})
 _DEFINITIONS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
+_FIELDS: dict[type, tuple[str, ...]] = {}     # per node type, the fields that are written out
 
 
 @dataclass(frozen=True)
 class Fingerprint:
-    """The winnowed fingerprints of one cell (Q-independent; see the module docstring)."""
+    """The winnowed fingerprints of one cell (see the module docstring)."""
 
     tokens: int              #: normalised length (syntax-tree nodes kept)
     hashes: np.ndarray       #: uint64 hash of every k-gram, in order
-    lines: np.ndarray        #: (n_kgrams, 2) first and last source line of each k-gram
-    prints: np.ndarray       #: winnowed hashes, sorted and unique
+    token_lines: np.ndarray  #: source line of every normalised token
+    prints: np.ndarray       #: winnowed hashes (the minimum of each window), sorted, unique
 
 
 @dataclass(frozen=True)
@@ -138,34 +141,51 @@ def normalise(source: str) -> list[tuple[str, int]]:
         raise ValueError(f"source must be a string, got {type(source).__name__}")
     try:
         tree = ast.parse(_MAGIC_LINE.sub("", source))
-    except (SyntaxError, ValueError):   # ValueError: a null byte in the source
+    except (SyntaxError, ValueError, RecursionError, MemoryError):  # ValueError: a null byte
         return []
     others, definitions = [], []
     for stmt in tree.body:
-        tokens = []
-        _emit(stmt, getattr(stmt, "lineno", 1), tokens)
+        tokens = _emit(stmt)
         (definitions if isinstance(stmt, _DEFINITIONS) else others).append(tokens)
     definitions.sort(key=lambda toks: [t for t, _ in toks])
     return [tok for block in others + definitions for tok in block]
 
 
-def _emit(node: ast.AST, line: int, out: list[tuple[str, int]]) -> None:
-    """Append the pre-order tokens of ``node`` to ``out`` (see :func:`normalise`)."""
-    if _is_bare_string(node):
-        return
-    line = getattr(node, "lineno", line)
-    out.append((type(node).__name__, line))
-    for field, value in ast.iter_fields(node):
-        if field in _SKIPPED_FIELDS:
-            continue
+def _emit(root: ast.AST) -> list[tuple[str, int]]:
+    """The pre-order tokens of ``root`` (see :func:`normalise`), with an explicit stack so that
+    deeply nested code cannot exhaust Python's recursion limit."""
+    out: list[tuple[str, int]] = []
+    stack = [(root, getattr(root, "lineno", 1))]
+    while stack:
+        node, line = stack.pop()
+        cls = node.__class__
+        if cls is str:                      # a leaf prepared by its parent
+            out.append((node, line))
+        elif cls is ast.Name:               # the commonest node, inlined
+            out += [("Name", node.lineno), (node.id if node.id in _BUILTINS else "V", node.lineno)]
+        elif not _is_bare_string(node):
+            line = getattr(node, "lineno", line)
+            out.append((cls.__name__, line))
+            stack += [(child, line) for child in reversed(_children(node))]
+    return out
+
+
+def _children(node: ast.AST) -> list:
+    """The sub-trees and leaf tokens of ``node``, in field order, without skipped fields."""
+    fields = _FIELDS.get(node.__class__)
+    if fields is None:
+        fields = _FIELDS[node.__class__] = tuple(f for f in node._fields
+                                                 if f not in _SKIPPED_FIELDS)
+    children = []
+    for field in fields:
+        value = getattr(node, field, None)
         if isinstance(value, ast.AST):
-            _emit(value, line, out)
+            children.append(value)
         elif isinstance(value, list):
-            for item in value:
-                if isinstance(item, ast.AST):
-                    _emit(item, line, out)
+            children += [item for item in value if isinstance(item, ast.AST)]
         elif value is not None:
-            out.append((_leaf(node, field, value), line))
+            children.append(_leaf(node, field, value))
+    return children
 
 
 def _is_bare_string(node: ast.AST) -> bool:
@@ -237,18 +257,18 @@ def fingerprint(source: str, k: int = K_GRAM, window: int = WINDOW) -> Fingerpri
     tokens = normalise(source)
     if len(tokens) < k + window - 1:
         return None
-    ids = np.fromiter((_token_id(t) for t, _ in tokens), dtype=np.uint64, count=len(tokens))
-    lines = np.fromiter((n for _, n in tokens), dtype=np.int64, count=len(tokens))
-    powers = np.uint64(1_000_003) ** np.arange(k - 1, -1, -1, dtype=np.uint64)
-    with np.errstate(over="ignore"):   # the hash is modulo 2**64 on purpose
-        grams = np.lib.stride_tricks.sliding_window_view(ids, k)
-        hashes = (grams * powers).sum(axis=1, dtype=np.uint64)
-    span = np.lib.stride_tricks.sliding_window_view(lines, k)
-    kept = np.lib.stride_tricks.sliding_window_view(hashes, window).argmin(axis=1)
-    kept += np.arange(len(kept))
+    ids = np.array([_TOKEN_IDS.get(t) or _token_id(t) for t, _ in tokens], dtype=np.uint64)
+    n_grams = ids.size - k + 1
+    hashes = np.zeros(n_grams, dtype=np.uint64)
+    with np.errstate(over="ignore"):   # the polynomial hash is modulo 2**64 on purpose
+        for j in range(k):
+            hashes = hashes * np.uint64(1_000_003) + ids[j:j + n_grams]
+    smallest = hashes[:n_grams - window + 1].copy()
+    for j in range(1, window):         # the minimum of every window of k-gram hashes
+        np.minimum(smallest, hashes[j:j + smallest.size], out=smallest)
     return Fingerprint(tokens=len(tokens), hashes=hashes,
-                       lines=np.stack([span.min(axis=1), span.max(axis=1)], axis=1),
-                       prints=np.unique(hashes[kept]))
+                       token_lines=np.array([line for _, line in tokens], dtype=np.int64),
+                       prints=np.unique(smallest))
 
 
 def jaccard(a: Fingerprint, b: Fingerprint) -> float:
@@ -269,11 +289,13 @@ def shared_lines(a: Fingerprint, b: Fingerprint) -> tuple[frozenset[int], frozen
     return _covered(a, np.isin(a.hashes, b.hashes)), _covered(b, np.isin(b.hashes, a.hashes))
 
 
-def _covered(fp: Fingerprint, mask: np.ndarray) -> frozenset[int]:
-    lines = set()
-    for first, last in fp.lines[mask]:
-        lines.update(range(int(first), int(last) + 1))
-    return frozenset(lines)
+def _covered(fp: Fingerprint, matched: np.ndarray) -> frozenset[int]:
+    """Lines of the tokens that belong to at least one matched k-gram."""
+    k = fp.token_lines.size - fp.hashes.size + 1
+    starts = np.r_[0, np.cumsum(matched)]          # matched k-grams starting before each index
+    token = np.arange(fp.token_lines.size)
+    inside = starts[np.minimum(token + 1, matched.size)] - starts[np.maximum(token - k + 1, 0)] > 0
+    return frozenset(np.unique(fp.token_lines[inside]).tolist())
 
 
 def common_limit(n_cells: int) -> int:
@@ -329,22 +351,24 @@ def shared_counts(prints: list[np.ndarray], limit: int) -> np.ndarray:
 
 def find_similar(cells: Mapping[str, Mapping[str, str]], references: Mapping[str, str] | None = None,
                  *, threshold: float = THRESHOLD, min_tokens: int = MIN_TOKENS,
-                 k: int = K_GRAM, window: int = WINDOW) -> list[Match]:
+                 k: int = K_GRAM, window: int = WINDOW, jobs: int = 1) -> list[Match]:
     """Near-copied cells between students, and cells that copy the reference (issue 11.3).
 
     Parameters
     ----------
     cells : mapping
         ``{student: {graded name: solution-cell source}}``; names are compared only with the
-        same name.
+        same name. Empty or non-string sources (a missing cell) are skipped.
     references : mapping, optional
-        ``{graded name: course_lib reference source}``.
+        ``{graded name: course_lib reference source}``, e.g. from :func:`reference_source`.
     threshold : float
         Report at or above this score (default :data:`THRESHOLD`), in ``(0, 1]``.
     min_tokens : int
         Ignore cells with fewer normalised tokens (default :data:`MIN_TOKENS`).
     k, window : int
         k-gram length and winnowing window.
+    jobs : int
+        Processes that fingerprint the cells (1: this process only).
 
     Returns
     -------
@@ -353,27 +377,47 @@ def find_similar(cells: Mapping[str, Mapping[str, str]], references: Mapping[str
     """
     if not isinstance(cells, Mapping):
         raise ValueError(f"cells must map student -> {{name: source}}, got {type(cells).__name__}")
-    if not 0 < threshold <= 1:
-        raise ValueError(f"threshold must be in (0, 1], got {threshold!r}")
-    _check_positive_int(min_tokens=min_tokens, k=k, window=window)
-    references = references or {}
-    cache: dict[str, Fingerprint | None] = {}
+    if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) \
+            or not 0 < threshold <= 1:
+        raise ValueError(f"threshold must be a number in (0, 1], got {threshold!r}")
+    _check_positive_int(min_tokens=min_tokens, k=k, window=window, jobs=jobs)
+    references = {n: r for n, r in (references or {}).items() if isinstance(r, str)}
+    sources = {src for per in cells.values() if isinstance(per, Mapping)
+               for src in per.values() if isinstance(src, str)}
+    prints = fingerprint_all(sources | set(references.values()), k, window, jobs)
+    return compare_fingerprinted(cells, prints, references, threshold=threshold,
+                                 min_tokens=min_tokens)
+
+
+def compare_fingerprinted(cells: Mapping[str, Mapping[str, str]],
+                          prints: Mapping[str, Fingerprint | None],
+                          references: Mapping[str, str], *, threshold: float = THRESHOLD,
+                          min_tokens: int = MIN_TOKENS) -> list[Match]:
+    """:func:`find_similar` once every source is fingerprinted (``prints`` from
+    :func:`fingerprint_all`): per graded name, every pair and every cell against its reference."""
     found: list[Match] = []
     for name, by_student in _by_name(cells).items():
-        prints = {}
-        for student, source in by_student.items():
-            if source not in cache:
-                cache[source] = fingerprint(source, k, window)
-            fp = cache[source]
-            if fp is not None and fp.tokens >= min_tokens:
-                prints[student] = fp
-        ref = references.get(name)
-        ref_fp = fingerprint(ref, k, window) if isinstance(ref, str) else None
-        found += _pairs_of(name, prints, by_student, threshold)
-        if ref_fp is not None and ref_fp.tokens >= min_tokens:
-            found += _reference_matches(name, prints, by_student, ref, ref_fp, threshold)
+        kept = {student: prints[src] for student, src in by_student.items()
+                if prints[src] is not None and prints[src].tokens >= min_tokens}
+        found += _pairs_of(name, kept, by_student, threshold)
+        ref = prints.get(references.get(name))
+        if ref is not None and ref.tokens >= min_tokens:
+            found += _reference_matches(name, kept, by_student, references[name], ref, threshold)
     found.sort(key=lambda m: (-m.score, not m.is_reference, m.name, m.left, m.right))
     return found
+
+
+def fingerprint_all(sources: Iterable[str], k: int = K_GRAM, window: int = WINDOW,
+                    jobs: int = 1) -> dict[str, Fingerprint | None]:
+    """``{source: fingerprint(source)}`` for distinct sources, in ``jobs`` processes."""
+    _check_positive_int(k=k, window=window, jobs=jobs)
+    unique = sorted(set(sources))
+    work = functools.partial(fingerprint, k=k, window=window)
+    if jobs == 1 or len(unique) < 100:
+        return {src: work(src) for src in unique}
+    with concurrent.futures.ProcessPoolExecutor(max_workers=jobs) as pool:
+        chunk = max(1, len(unique) // (8 * jobs))
+        return dict(zip(unique, pool.map(work, unique, chunksize=chunk)))
 
 
 def _by_name(cells: Mapping[str, Mapping[str, str]]) -> dict[str, dict[str, str]]:
@@ -465,11 +509,14 @@ def _match_html(m: Match) -> str:
             f"<td>{_code_html(m.right_source, m.right_lines)}</td></tr></table></details>")
 
 
-def _overflow_html(rest: list[Match]) -> list[str]:
+def _overflow_html(rest: list[Match], listed: int = 200) -> list[str]:
+    """The matches not shown in full, by name and score (the first ``listed`` of them)."""
     if not rest:
         return []
-    items = ", ".join(f"{_e(m.name)}: {_e(m.left)}/{_e(m.right)} {m.score:.0%}" for m in rest)
-    return [f"<p class='note'>Also above the threshold: {items}.</p>"]
+    items = ", ".join(f"{_e(m.name)}: {_e(m.left)}/{_e(m.right)} {m.score:.0%}"
+                      for m in rest[:listed])
+    more = f" and {len(rest) - listed} more" if len(rest) > listed else ""
+    return [f"<p class='note'>Also above the threshold: {items}{more}.</p>"]
 
 
 def _code_html(source: str, marked: frozenset[int]) -> str:

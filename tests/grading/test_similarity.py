@@ -240,6 +240,27 @@ def test_unparsable_cells_and_magics():
         sim.normalise(None)
 
 
+def test_deeply_nested_or_huge_cells_do_not_break_the_report():
+    deep = "x = " + "(" * 3000 + "1" + ")" * 3000 + "\n"     # beyond the parser's nesting
+    chain = "x = 1" + " + 1" * 50000 + "\n"                    # beyond the compiler's recursion
+    assert sim.normalise(deep) == [] and sim.normalise(chain) == []
+    long_sum = "x = 1" + " + y" * 900 + "\n"      # parses: 900 nested BinOps, no recursion here
+    assert len(sim.normalise(long_sum)) > 900 * 4
+    found = sim.find_similar({"a": {"f": deep}, "b": {"f": long_sum}, "c": {"f": long_sum}})
+    assert [(m.left, m.right) for m in found] == [("b", "c")]
+
+
+def test_fingerprints_in_two_processes_are_those_of_one():
+    cells = _class_of(120, seed=4)
+    sources = [c["clip_polygon"] for c in cells.values()]
+    both = sim.fingerprint_all(sources, jobs=2)
+    assert len(both) == len(set(sources)) >= 100
+    for src in sources[:10]:
+        alone = sim.fingerprint(src)
+        assert np.array_equal(both[src].prints, alone.prints)
+        assert np.array_equal(both[src].token_lines, alone.token_lines)
+
+
 def test_winnowing_guarantee_a_shared_run_of_k_plus_window_minus_one_tokens():
     """Schleimer et al.'s guarantee: any shared run of k + w - 1 tokens gives a shared
     fingerprint, whatever code surrounds it (checked on random surroundings)."""
@@ -347,6 +368,7 @@ def test_render_section_lists_matches_beyond_the_limit_by_name():
 @pytest.mark.parametrize("kwargs, word", [
     ({"threshold": 0.0}, "threshold"), ({"threshold": 1.5}, "threshold"),
     ({"min_tokens": 0}, "min_tokens"), ({"k": 0}, "k"), ({"window": 2.5}, "window"),
+    ({"jobs": 0}, "jobs"), ({"threshold": "high"}, "threshold"),
 ])
 def test_bad_arguments_raise_value_error_naming_them(kwargs, word):
     with pytest.raises(ValueError, match=word):
