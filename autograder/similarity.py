@@ -98,7 +98,7 @@ _DEFINITIONS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
 _FIELDS: dict[type, tuple[str, ...]] = {}     # per node type, the fields that are written out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Fingerprint:
     """The winnowed fingerprints of one cell (see the module docstring)."""
 
@@ -135,13 +135,13 @@ def normalise(source: str) -> list[tuple[str, int]]:
 
     Identifiers become ``V`` and strings ``S``; docstrings, comments, annotations and layout go;
     top-level definitions are sorted by their normalised text. A cell that does not parse
-    (even after its IPython ``%``/``!`` lines are blanked) gives ``[]``.
+    (even with its IPython ``%``/``!`` lines blanked), or that nests deeper than Python's
+    parser allows, gives ``[]``.
     """
     if not isinstance(source, str):
         raise ValueError(f"source must be a string, got {type(source).__name__}")
-    try:
-        tree = ast.parse(_MAGIC_LINE.sub("", source))
-    except (SyntaxError, ValueError, RecursionError, MemoryError):  # ValueError: a null byte
+    tree = _parse(source)
+    if tree is None:
         return []
     others, definitions = [], []
     for stmt in tree.body:
@@ -149,6 +149,17 @@ def normalise(source: str) -> list[tuple[str, int]]:
         (definitions if isinstance(stmt, _DEFINITIONS) else others).append(tokens)
     definitions.sort(key=lambda toks: [t for t, _ in toks])
     return [tok for block in others + definitions for tok in block]
+
+
+def _parse(source: str) -> ast.Module | None:
+    """The cell's syntax tree; failing that, the tree with its IPython ``%``/``!`` lines blanked
+    (only then: ``!= b`` may start a continuation line); ``None`` when neither parses."""
+    for text in (source, _MAGIC_LINE.sub("", source)):
+        try:
+            return ast.parse(text)
+        except (SyntaxError, ValueError, RecursionError, MemoryError):  # ValueError: NUL byte
+            continue
+    return None
 
 
 def _emit(root: ast.AST) -> list[tuple[str, int]]:

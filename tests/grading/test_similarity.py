@@ -236,6 +236,8 @@ def test_unparsable_cells_and_magics():
     assert sim.fingerprint("def f(:\n") is None
     with_magic = "%matplotlib widget\nx = 1\n"
     assert [t for t, _ in sim.normalise(with_magic)] == [t for t, _ in sim.normalise("\nx = 1\n")]
+    continued = "ok = (a\n      != b)\n"          # a line starting with "!" that is no magic
+    assert [t for t, _ in sim.normalise(continued)] == [t for t, _ in sim.normalise("ok = a != b")]
     with pytest.raises(ValueError, match="source"):
         sim.normalise(None)
 
