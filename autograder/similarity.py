@@ -494,7 +494,8 @@ def render_section(matches: Iterable[Match], *, threshold: float = THRESHOLD,
     refs = [m for m in matches if m.is_reference]
     pairs = [m for m in matches if not m.is_reference]
     out = [f"<section class='simil'><style>{_SECTION_STYLE}</style>",
-           f"<h2>Similar solutions ({len(refs)} like the reference, {len(pairs)} pairs)</h2>",
+           f"<h2>Similar solutions ({len(refs)} like the reference, {len(pairs)} "
+           f"pair{'' if len(pairs) == 1 else 's'})</h2>",
            f"<p class='note'>Solution cells compared per graded function after normalising names, "
            f"comments, docstrings and layout (k-gram winnowing). Listed when at least "
            f"{threshold:.0%} of the shorter cell's fingerprints are in the other; cells under "

@@ -162,9 +162,16 @@ def test_a_hand_copied_pair_is_flagged_and_its_lines_marked():
     found = sim.find_similar(cells)
     assert [(m.left, m.right, m.name) for m in found] == [("alice", "bob", "ring_hole_positions")]
     assert found[0].score >= sim.THRESHOLD
-    # the loop is marked on both sides, the copier's first comment line is not
-    assert any("np.arange(8 * k)" in HAND_WRITTEN.splitlines()[n - 1] for n in found[0].left_lines)
-    assert 2 not in found[0].right_lines and 1 not in found[0].right_lines
+    # the loop and the re-ordered helper are marked on both sides, the added docstring is not
+    def line_of(source, text):
+        return next(n for n, line in enumerate(source.splitlines(), 1) if text in line)
+
+    m = found[0]
+    assert {line_of(HAND_WRITTEN, "np.arange(8 * k)"), line_of(HAND_WRITTEN, "return v / n")} \
+        <= m.left_lines
+    assert {line_of(HAND_COPIED, "np.arange(8 * ring)"), line_of(HAND_COPIED, "return vec / ")} \
+        <= m.right_lines
+    assert line_of(HAND_COPIED, "Hole centres") not in m.right_lines
 
 
 @pytest.mark.parametrize("seed", [0, 1])
@@ -356,6 +363,18 @@ def test_render_section_escapes_and_marks_the_evidence_side_by_side():
     assert page.count("<pre>") == 2 and "<mark>" in page
     assert f"{sim.THRESHOLD:.0%}" in page and str(sim.MIN_TOKENS) in page
     assert "None above the threshold" in sim.render_section([])
+
+
+def test_render_section_puts_pasted_references_first():
+    ref = sim.reference_source(REGISTRY["clip_polygon"].reference)
+    found = sim.find_similar({"a": {"clip_polygon": HAND_WRITTEN + "\n" + ref},
+                              "b": {"ring_hole_positions": HAND_WRITTEN},
+                              "c": {"ring_hole_positions": HAND_COPIED}},
+                             {"clip_polygon": ref})
+    assert [(m.left, m.right) for m in found] == [("a", sim.REFERENCE), ("b", "c")]
+    page = sim.render_section(found)
+    assert page.index("Like the course_lib reference") < page.index("Pairs of students")
+    assert "(1 like the reference, 1 pair)" in page
 
 
 def test_render_section_lists_matches_beyond_the_limit_by_name():
