@@ -497,10 +497,12 @@ def render_section(matches: Iterable[Match], *, threshold: float = THRESHOLD,
            f"<h2>Similar solutions ({len(refs)} like the reference, {len(pairs)} "
            f"pair{'' if len(pairs) == 1 else 's'})</h2>",
            f"<p class='note'>Solution cells compared per graded function after normalising names, "
-           f"comments, docstrings and layout (k-gram winnowing). Listed when at least "
-           f"{threshold:.0%} of the shorter cell's fingerprints are in the other; cells under "
-           f"{min_tokens} normalised tokens are too short to tell and never listed. This is "
-           f"evidence to read, not a verdict: marked lines are the shared code.</p>"]
+           f"comments, docstrings and layout (k-gram winnowing). Two students are listed when "
+           f"at least {threshold:.0%} of the fingerprints either cell has are in both (Jaccard "
+           f"index); a student, when the cell holds at least {threshold:.0%} of the reference's "
+           f"fingerprints. Cells under {min_tokens} normalised tokens are too short to tell and "
+           f"never listed. This is evidence to read, not a verdict: marked lines are the "
+           f"shared code.</p>"]
     if not matches:
         out.append("<p>None above the threshold.</p>")
     budget = limit
