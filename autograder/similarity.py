@@ -336,7 +336,7 @@ def shared_counts(prints: list[np.ndarray], limit: int) -> np.ndarray:
     counts them for every pair at once.
     """
     n = len(prints)
-    counts = np.zeros((n, n), dtype=np.int64)
+    counts = np.zeros((n, n), dtype=np.int32)    # 1 MB for 500 cells of one name
     sizes = np.fromiter((p.size for p in prints), dtype=np.int64, count=n)
     if n < 2 or not sizes.any():
         return counts
@@ -356,7 +356,7 @@ def shared_counts(prints: list[np.ndarray], limit: int) -> np.ndarray:
         in_common = np.repeat(common, held)
         dense = np.zeros((n, int(common.sum())), dtype=np.float32)
         dense[owner[in_common], column[in_common]] = 1.0
-        counts += np.triu(np.rint(dense @ dense.T).astype(np.int64), 1)
+        counts += np.triu(np.rint(dense @ dense.T).astype(np.int32), 1)
     return counts
 
 
