@@ -485,9 +485,20 @@ def render_section(matches: Iterable[Match], *, threshold: float = THRESHOLD,
                    min_tokens: int = MIN_TOKENS, limit: int = 50) -> str:
     """The report's "Similar solutions" section: an HTML fragment (no scripts, no network).
 
-    Pasted references first, then pairs of students; each with its score and the two cells
-    side by side, escaped, lines inside shared k-grams marked. At most ``limit`` matches are
-    shown in full; the rest are listed by name and score.
+    Parameters
+    ----------
+    matches : iterable of Match
+        From :func:`find_similar`.
+    threshold, min_tokens : float, int
+        The values ``matches`` were found with, stated in the section's note.
+    limit : int
+        Matches shown in full (the two cells side by side, escaped, lines inside shared k-grams
+        marked); the rest are listed by name and score.
+
+    Returns
+    -------
+    str
+        ``<section>...</section>``: pasted references first, then pairs of students.
     """
     matches = list(matches)
     _check_positive_int(limit=limit)
@@ -536,7 +547,7 @@ def _overflow_html(rest: list[Match], listed: int = 200) -> list[str]:
 def _code_html(source: str, marked: frozenset[int]) -> str:
     rows = [f"<mark>{_e(text)}</mark>" if number in marked else _e(text)
             for number, text in enumerate(source.splitlines(), start=1)]
-    return "<pre>" + "\n".join(rows) + "</pre>"
+    return "<pre>\n" + "\n".join(rows) + "</pre>"   # HTML drops a newline right after <pre>
 
 
 def _e(text) -> str:
