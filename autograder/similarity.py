@@ -172,9 +172,13 @@ def _emit(root: ast.AST) -> list[tuple[str, int]]:
         cls = node.__class__
         if cls is str:                      # a leaf prepared by its parent
             out.append((node, line))
-        elif cls is ast.Name:               # the commonest node, inlined
+        elif cls is ast.Name:               # the two commonest nodes, inlined
             out += [("Name", node.lineno), (node.id if node.id in _BUILTINS else "V", node.lineno)]
-        elif not _is_bare_string(node):
+        elif cls is ast.Constant:
+            value = node.value
+            out += [("Constant", node.lineno),
+                    ("S" if isinstance(value, (str, bytes)) else repr(value), node.lineno)]
+        elif cls is not ast.Expr or not _is_bare_string(node):
             line = getattr(node, "lineno", line)
             out.append((cls.__name__, line))
             stack += [(child, line) for child in reversed(_children(node))]
