@@ -9,9 +9,9 @@ honest ``phong`` delegates to a helper) stays close and is often reported, which
 heavy case for the report. 1 % of the
 students hand in a disguised copy of another's cells (names changed, layout of
 ``ast.unparse``, helpers reversed, comments added). The references are ``course_lib``'s, with
-their private helpers (:func:`autograder.similarity.reference_source`).
+their private helpers (:func:`autograder.outputs.similarity.reference_source`).
 
-- **ours**: :func:`autograder.similarity.find_similar` on every cell, references included
+- **ours**: :func:`autograder.outputs.similarity.find_similar` on every cell, references included
   (normalise, fingerprint, per-name inverted index, scores, evidence lines), ``jobs=2``;
 - **peer**: the same fingerprints compared pair by pair with Python ``frozenset``
   intersections (every ``n (n - 1) / 2`` pair of every name), timed on the first
@@ -46,7 +46,7 @@ _MARKER = re.compile(r"^[ \t]*### (BEGIN|END) SOLUTION[^\n]*\n?", re.M)
 def implementations() -> dict[str, list[str]]:
     """``{graded function: [model answer, honest, reference]}``."""
     from autograder.exercises import REGISTRY
-    from autograder.similarity import reference_source
+    from autograder.outputs.similarity import reference_source
 
     names = sorted(n for n, ex in REGISTRY.items() if ex.kind == "function")
     out = {n: [] for n in names}
@@ -135,7 +135,7 @@ def make_class(n_students: int, seed: int = 0):
 def pairwise_peer(cells, names, prints) -> float:
     """Seconds to compare every pair of every name by ``frozenset`` intersections, on the
     fingerprints ours computed (what an all-pairs comparison has to do at least)."""
-    from autograder.similarity import MIN_TOKENS, THRESHOLD
+    from autograder.outputs.similarity import MIN_TOKENS, THRESHOLD
 
     sets = {}
     for name in names:
@@ -152,7 +152,7 @@ def pairwise_peer(cells, names, prints) -> float:
 
 
 def run(smoke: bool = False) -> list[Row]:
-    from autograder.similarity import compare_fingerprinted, fingerprint_all
+    from autograder.outputs.similarity import compare_fingerprinted, fingerprint_all
 
     n = SMOKE_STUDENTS if smoke else STUDENTS
     cells, references, planted = make_class(n)

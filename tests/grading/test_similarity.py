@@ -1,4 +1,4 @@
-"""autograder.similarity (issue 11, part 3): near copies between students and pasted references.
+"""autograder.outputs.similarity (issue 11, part 3): near copies between students and pasted references.
 
 The oracles are independent of the module: copies are made here by rewriting a cell's syntax
 tree (every name the author chose renamed, helpers re-ordered, layout from ``ast.unparse``,
@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from autograder import similarity as sim
+from autograder.outputs import similarity as sim
 from autograder.exercises import REGISTRY
 
 REPO = Path(__file__).resolve().parents[2]
@@ -401,3 +401,26 @@ def test_bad_cells_raise_value_error():
         sim.find_similar([("a", "x = 1")])
     with pytest.raises(ValueError, match="cells"):
         sim.find_similar({"a": "x = 1"})
+
+
+def test_the_grading_report_carries_the_section(tmp_path):
+    """grade writes report.html through outputs.report: the copied pair and the pasted
+    reference appear there with their evidence, the honest student does not."""
+    from autograder.model import CellKind, CellResult, Status
+    from autograder.outputs import report
+
+    ref = sim.reference_source(REGISTRY["ring_hole_positions"].reference)
+
+    def row(student, code):
+        return CellResult(student, "q2_nuclear", "test_ring_hole_positions", "ring_hole_positions",
+                          1.0, 1.0, Status.OK, "all cases passed", kind=CellKind.FUNCTION,
+                          code=code)
+
+    results = [row("alice", HAND_WRITTEN), row("bob", HAND_COPIED), row("carol", ""),
+               row("dave", "import math\n\n" + disguise(ref, 5))]
+    path = report.write_report(results, [], tmp_path / "report.html",
+                               references={"ring_hole_positions": ref})
+    page = path.read_text(encoding="utf-8")
+    section = page.split("Similar solutions", 1)[1]
+    assert "alice" in section and "bob" in section and "dave" in section
+    assert "carol" not in section
