@@ -99,15 +99,20 @@ def course_version() -> str:
     return importlib.metadata.version("4f9-course")
 
 
+def bundle_spec() -> dict:
+    """What ``setup.py`` builds: ``{"packages": [...], "compiled": [...]}``."""
+    return {"packages": library_packages(), "compiled": compiled_modules()}
+
+
 def sources_digest() -> str:
-    """A digest of everything the wheel is built from (library, build script, interpreter)."""
+    """A digest of everything that goes into the wheel: the library, the build script, the
+    metadata and README, the module lists, the interpreter that compiles it."""
     h = hashlib.sha256()
     for rel in library_files():
         h.update(str(rel).encode() + b"\0" + (REPO_ROOT / rel).read_bytes() + b"\0")
-    for path in (SETUP_SCRIPT, Path(__file__)):
-        h.update(path.read_bytes())
-    h.update(json.dumps([course_version(), student_requirements(), sys.version,
-                         sysconfig.get_platform()]).encode())
+    h.update(SETUP_SCRIPT.read_bytes())
+    h.update(json.dumps([course_version(), bundle_spec(), pyproject_text("0"), student_readme(),
+                         sys.version, sysconfig.get_platform()]).encode())
     return h.hexdigest()
 
 
@@ -142,8 +147,7 @@ def stage_sources(stage: Path, digest: str) -> Path:
         (stage / rel).parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(REPO_ROOT / rel, stage / rel)
     shutil.copyfile(SETUP_SCRIPT, stage / "setup.py")
-    (stage / "bundle.json").write_text(json.dumps(
-        {"packages": library_packages(), "compiled": compiled_modules()}, indent=1))
+    (stage / "bundle.json").write_text(json.dumps(bundle_spec(), indent=1))
     (stage / "pyproject.toml").write_text(pyproject_text(wheel_version(digest)))
     (stage / "README.md").write_text(student_readme())
     return stage
@@ -235,17 +239,22 @@ def ensure_student_env(env_dir: Path, wheel: Path, base_python: str | None = Non
     holds another build. Returns the environment's interpreter.
     """
     env_dir = Path(env_dir).resolve()
-    env_dir.parent.mkdir(parents=True, exist_ok=True)
-    with _locked(env_dir.parent / f".{env_dir.name}.lock"):
+    env_dir.mkdir(parents=True, exist_ok=True)  # ``venv`` fills an existing folder
+    with _locked(env_dir / ".student-env.lock"):
         python = env_python(env_dir)
         if not python.exists():
             base = base_python or getattr(sys, "_base_executable", sys.executable)
-            subprocess.run([base, "-m", "venv", str(env_dir)], check=True, timeout=300)
+            subprocess.run([base, "-m", "venv", str(env_dir)], check=True, timeout=300,
+                           capture_output=True)
         stamp = env_dir / ".student-wheel"
         if not stamp.exists() or stamp.read_text() != Path(wheel).name:
-            subprocess.run([str(python), "-m", "pip", "install", "--quiet",
-                            "--disable-pip-version-check", str(wheel)],
-                           check=True, timeout=BUILD_TIMEOUT, env=student_env_vars(env_dir))
+            proc = subprocess.run([str(python), "-m", "pip", "install", "--quiet",
+                                   "--disable-pip-version-check", str(wheel)],
+                                  capture_output=True, text=True, timeout=BUILD_TIMEOUT,
+                                  env=student_env_vars(env_dir), check=False)
+            if proc.returncode != 0:
+                raise RuntimeError(f"installing {Path(wheel).name} into {env_dir} failed:\n"
+                                   f"{proc.stdout[-2000:]}\n{proc.stderr[-3000:]}")
             stamp.write_text(Path(wheel).name)
     return python
 
