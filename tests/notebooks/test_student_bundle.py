@@ -86,7 +86,7 @@ def graded_references() -> dict[str, tuple[str, str]]:
 
 def test_release_writes_wheel_and_readme(bundle, wheel):
     assert sorted(p.name for p in bundle.iterdir()) == sorted([ASSIGNMENT, "student"])
-    assert sorted(p.name for p in (bundle / "student").iterdir()) == ["README.md", wheel.name]
+    assert sorted(p.name for p in (bundle / "student").iterdir()) == sorted(["README.md", wheel.name])
     assert [p.name for p in sorted((bundle / ASSIGNMENT).iterdir())] == [p.name for p in NOTEBOOKS]
     readme = (bundle / "student" / "README.md").read_text()
     assert f"pip install {wheel.name}" in readme
@@ -198,7 +198,7 @@ def _probe_sources(targets):
         if ipython_source:
             found.append(ipython_source[:80])
         report[f"{module_name}.{qualname}"] = {
-            "file": module.__file__, "doc": (obj.__doc__ or "").strip(),
+            "file": module.__file__, "doc": inspect.getdoc(obj) or "",
             "signature": str(inspect.signature(obj)), "found": found,
         }
     return report
