@@ -63,18 +63,21 @@ def student_env_lab(tmp_path, repo_root, free_port):
 
 def test_student_env_shows_docstring_not_source(page, student_env_lab, artifacts):
     base, query = student_env_lab.split("/lab", 1)[0], student_env_lab.split("?", 1)[1]
-    page.goto(f"{base}/lab/tree/tripos2006/q6_clipping.ipynb?{query}")
-    page.wait_for_selector(".jp-NotebookPanel .jp-Notebook .jp-Cell")
-    page.locator(".jp-NotebookPanel-toolbar", has_text="Validate").first.wait_for(timeout=30_000)
+    # a workspace of its own (``reset``): no tab restored from another test's session
+    page.goto(f"{base}/lab/workspaces/student-env/tree/tripos2006/q6_clipping.ipynb?reset&{query}")
+    panel = page.locator(".jp-NotebookPanel:visible").first
+    panel.locator(".jp-Notebook .jp-Cell").first.wait_for()
+    page.locator(".jp-NotebookPanel-toolbar:visible", has_text="Validate").first.wait_for(
+        timeout=30_000)
     # a new cell above the first: where is course_lib, and what does ?? show of a reference
-    page.locator(".jp-Notebook .jp-Cell").first.click()
+    panel.locator(".jp-Notebook .jp-Cell").first.click()
     page.keyboard.press("Escape")
     page.keyboard.press("a")
     page.keyboard.press("Enter")
     page.keyboard.type("import course_lib.clipping as reference\nprint(reference.__file__)\n"
                        "reference.clip_polygon??")
     page.keyboard.press("Shift+Enter")
-    output = page.locator(".jp-Notebook .jp-Cell").first.locator(".jp-OutputArea")
+    output = panel.locator(".jp-Notebook .jp-Cell").first.locator(".jp-OutputArea")
     output.get_by_text("Sutherland-Hodgman").first.wait_for(timeout=120_000)
     text = output.inner_text()
     page.screenshot(path=str(artifacts / "student-env-clip-polygon-source.png"))
