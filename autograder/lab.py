@@ -228,7 +228,7 @@ def main(args: argparse.Namespace) -> int:
                 open_browser=not args.no_browser, config_dir=Path(tmp),
                 student_env=args.student_env, build_cache=args.build_cache,
             )
-        except (FileNotFoundError, RuntimeError, subprocess.CalledProcessError) as exc:
+        except (FileNotFoundError, ValueError, RuntimeError, subprocess.CalledProcessError) as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 1
         view = ("student view: the released notebooks (solutions stubbed)" if args.role == "student"
