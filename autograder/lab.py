@@ -47,7 +47,14 @@ from .course import (
     nbgrader_env,
     prepare_course,
 )
-from .student_bundle import build_wheel, default_build_cache, ensure_student_env, student_env_vars
+from .student_bundle import (
+    STUDENT_DISABLED_PLUGINS,
+    STUDENT_DISABLED_SERVER_EXTENSIONS,
+    build_wheel,
+    default_build_cache,
+    ensure_student_env,
+    student_env_vars,
+)
 
 #: JupyterLab 4 plugin ids of nbgrader 0.9 (``@jupyter/nbgrader`` since 0.9.3).
 NBGRADER_PLUGINS = (
@@ -57,16 +64,8 @@ NBGRADER_PLUGINS = (
     "@jupyter/nbgrader:assignment-list",
     "@jupyter/nbgrader:validate-assignment",
 )
-#: What a student must not have.
-STUDENT_DISABLED_PLUGINS = (
-    "@jupyter/nbgrader:formgrader",
-    "@jupyter/nbgrader:create-assignment",
-    "@jupyter/nbgrader:course-list",
-)
-STUDENT_DISABLED_SERVER_EXTENSIONS = (
-    "nbgrader.server_extensions.formgrader",
-    "nbgrader.server_extensions.course_list",
-)
+# What a student must not have (STUDENT_DISABLED_PLUGINS, STUDENT_DISABLED_SERVER_EXTENSIONS)
+# is defined beside the students' wheel, which switches the same things off where it is installed.
 ROLES = ("student", "instructor")
 #: JupyterLab's news/announcements plugin, off in both views.
 NEWS_PLUGIN = "@jupyterlab/apputils-extension:announcements"

@@ -49,6 +49,23 @@ SHIPPED_AS_SOURCE = ("course_lib.answers",)
 #: package metadata, so the two never disagree)
 STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "jupyterlab", "nbgrader")
 SETUP_SCRIPT = Path(__file__).with_name("student_setup.py")
+#: nbgrader's instructor tools: off in ``make lab``'s student view and, through the wheel's
+#: Jupyter config files (:func:`student_jupyter_config`), wherever the wheel is installed
+STUDENT_DISABLED_PLUGINS = (
+    "@jupyter/nbgrader:formgrader",
+    "@jupyter/nbgrader:create-assignment",
+    "@jupyter/nbgrader:course-list",
+)
+STUDENT_DISABLED_SERVER_EXTENSIONS = (
+    "nbgrader.server_extensions.formgrader",
+    "nbgrader.server_extensions.course_list",
+)
+#: where the wheel's Jupyter config files go, under the environment's ``etc/jupyter/``; the
+#: server file sorts after nbgrader's own ``nbgrader.json`` so that it wins
+JUPYTER_CONFIG_FILES = {
+    "labconfig/page_config.d/4f9-student.json": "page",
+    "jupyter_server_config.d/zz-4f9-student.json": "server",
+}
 #: wheel members that must never reach a student, by suffix
 FORBIDDEN_SUFFIXES = (".pyc", ".pyo", ".c", ".cpp", ".h", ".pyx", ".pxd", ".ipynb")
 BUILD_TIMEOUT = 1800
@@ -99,9 +116,23 @@ def course_version() -> str:
     return importlib.metadata.version("4f9-course")
 
 
+def student_jupyter_config() -> dict[str, dict]:
+    """``{path under etc/jupyter: JSON}``: nbgrader's instructor tools off for a student."""
+    contents = {
+        "page": {"disabledExtensions": {p: True for p in STUDENT_DISABLED_PLUGINS}},
+        "server": {"ServerApp": {"jpserver_extensions": {
+            ext: False for ext in STUDENT_DISABLED_SERVER_EXTENSIONS}}},
+    }
+    return {path: contents[kind] for path, kind in JUPYTER_CONFIG_FILES.items()}
+
+
 def bundle_spec() -> dict:
-    """What ``setup.py`` builds: ``{"packages": [...], "compiled": [...]}``."""
-    return {"packages": library_packages(), "compiled": compiled_modules()}
+    """What ``setup.py`` builds: the packages, the modules to compile, and the Jupyter config
+    files as setuptools ``data_files`` (``[[target dir, [staged file]], ...]``)."""
+    data_files = [[str(Path("etc/jupyter", path).parent), [str(Path("jupyter", path))]]
+                  for path in JUPYTER_CONFIG_FILES]
+    return {"packages": library_packages(), "compiled": compiled_modules(),
+            "data_files": data_files}
 
 
 def sources_digest() -> str:
@@ -111,7 +142,8 @@ def sources_digest() -> str:
     for rel in library_files():
         h.update(str(rel).encode() + b"\0" + (REPO_ROOT / rel).read_bytes() + b"\0")
     h.update(SETUP_SCRIPT.read_bytes())
-    h.update(json.dumps([course_version(), bundle_spec(), pyproject_text("0"), student_readme(),
+    h.update(json.dumps([course_version(), bundle_spec(), student_jupyter_config(),
+                         pyproject_text("0"), student_readme(),
                          sys.version, sysconfig.get_platform()]).encode())
     return h.hexdigest()
 
@@ -148,6 +180,9 @@ def stage_sources(stage: Path, digest: str) -> Path:
         shutil.copyfile(REPO_ROOT / rel, stage / rel)
     shutil.copyfile(SETUP_SCRIPT, stage / "setup.py")
     (stage / "bundle.json").write_text(json.dumps(bundle_spec(), indent=1))
+    for path, content in student_jupyter_config().items():
+        (stage / "jupyter" / path).parent.mkdir(parents=True, exist_ok=True)
+        (stage / "jupyter" / path).write_text(json.dumps(content, indent=1))
     (stage / "pyproject.toml").write_text(pyproject_text(wheel_version(digest)))
     (stage / "README.md").write_text(student_readme())
     return stage
@@ -159,9 +194,12 @@ def wheel_problems(wheel: Path) -> list[str]:
     problems = []
     with zipfile.ZipFile(wheel) as zf:
         names = zf.namelist()
+    config_files = {f"data/etc/jupyter/{path}" for path in JUPYTER_CONFIG_FILES}
     for name in names:
-        top = name.split("/", 1)[0]
-        if top != LIBRARY and not (top.endswith(".dist-info") and "/" in name):
+        top, _, rest = name.partition("/")
+        allowed = (top == LIBRARY or top.endswith(".dist-info")
+                   or (top.endswith(".data") and rest in config_files))
+        if not allowed:
             problems.append(f"{name}: not part of {LIBRARY}")
         if name.endswith(".py") and module_name(Path(name)) in compiled:
             problems.append(f"{name}: source of a compiled module")

@@ -15,7 +15,7 @@ from setuptools import Extension, setup
 from setuptools.command.build_ext import build_ext
 from setuptools.command.build_py import build_py
 
-#: what to build, written by ``student_bundle``: {"packages": [...], "compiled": [...]}
+#: what to build, written by ``student_bundle``: {"packages", "compiled", "data_files"}
 BUNDLE_FILE = Path(__file__).resolve().parent / "bundle.json"
 
 #: docstrings stay (students read them with ``?``); no debug info, no source comments in the .so
@@ -69,6 +69,7 @@ def main() -> None:
     bundle = read_bundle()
     setup(
         packages=bundle["packages"],
+        data_files=[(target, files) for target, files in bundle["data_files"]],
         ext_modules=extensions(bundle["compiled"]),
         cmdclass={"build_py": SourceFreeBuildPy, "build_ext": ParallelBuildExt},
         zip_safe=False,

@@ -1,15 +1,16 @@
 """What students install, as ``python -m autograder release --out DIR`` writes it (issue 11).
 
 - ``DIR/student/`` holds exactly one wheel and a README that says how to install it;
-- the wheel holds ``course_lib`` and its metadata only: no ``autograder``, no notebook, and no
-  Python source, bytecode or C of any compiled module (read from the zip itself, not from the
-  builder's own check);
+- the wheel holds ``course_lib``, its metadata and two Jupyter config files only: no
+  ``autograder``, no notebook, and no Python source, bytecode or C of any compiled module (read
+  from the zip itself, not from the builder's own check);
 - no file of the wheel holds a solution cell's code, a model answer of a manually graded cell
   or a multiple-choice key (the byte search is shown to work on each module's docstring);
 - installed alone in a fresh virtual environment, the wheel exposes every graded reference of
   the registry with its docstring and signature, but neither ``inspect.getsource`` nor
   IPython's ``??`` finds its source (the same probe does find it in the instructors' copy);
-- every release notebook runs in that environment (kernel included) with no error but a stub's.
+- every release notebook runs in that environment (kernel included) with no error but a stub's;
+- in that environment nbgrader's instructor tools are off (its own Jupyter config), Validate on.
 """
 
 from __future__ import annotations
@@ -96,7 +97,9 @@ def test_release_writes_wheel_and_readme(bundle, wheel):
 def test_wheel_holds_no_source_key_or_grader(members):
     names = sorted(members)
     tops = {n.split("/", 1)[0] for n in names}
-    assert {t for t in tops if not t.endswith(".dist-info")} == {"course_lib"}, tops
+    assert {t for t in tops if not t.endswith((".dist-info", ".data"))} == {"course_lib"}, tops
+    data = [n.split("/", 1)[1] for n in names if n.split("/", 1)[0].endswith(".data")]
+    assert all(re.fullmatch(r"data/etc/jupyter/[\w./-]+\.d/[\w.-]+\.json", n) for n in data), data
     sources = {n for n in names if n.endswith(".py")}
     assert sources == READABLE, f"Python source beyond the readable modules: {sources - READABLE}"
     bad = [n for n in names if re.search(r"\.(pyc|pyo|c|cpp|h|pyx|pxd|ipynb)$", n)
@@ -259,3 +262,30 @@ def test_release_notebooks_run_in_student_env(bundle, student_python, tmp_path):
         passing = [n for n in graded_items(read(source)) if f"test_{n}" not in failed]
         problems += [f"{source.stem}: test_{n} passes on the stub" for n in passing]
     assert not problems, "\n".join(problems)
+
+
+def test_student_env_switches_off_instructor_tools(student_python, tmp_path):
+    """Installing the wheel is enough to get the student view of nbgrader: the Formgrader, Create
+    Assignment and Course List are off in the environment's own Jupyter config (read back with
+    Jupyter's config readers); Validate and the Assignments list stay on."""
+    code = textwrap.dedent("""
+        import json, sys
+        from jupyter_server.extension.config import ExtensionConfigManager
+        from jupyterlab_server.config import get_static_page_config
+        etc = sys.prefix + "/etc/jupyter"
+        server = ExtensionConfigManager(read_config_path=[etc]).get_jpserver_extensions()
+        page = get_static_page_config(level="sys_prefix")
+        print(json.dumps({"server": server, "disabled": page.get("disabledExtensions", {})}))
+        """)
+    proc = studentenv.run(code, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    got = json.loads(proc.stdout.strip().splitlines()[-1])
+    server, disabled = got["server"], got["disabled"]
+    for ext in ("formgrader", "course_list"):
+        assert server.get(f"nbgrader.server_extensions.{ext}") is False, server
+    for ext in ("validate_assignment", "assignment_list"):
+        assert server.get(f"nbgrader.server_extensions.{ext}") is True, server
+    for plugin in ("formgrader", "create-assignment", "course-list"):
+        assert disabled.get(f"@jupyter/nbgrader:{plugin}") is True, disabled
+    for plugin in ("validate-assignment", "assignment-list"):
+        assert not disabled.get(f"@jupyter/nbgrader:{plugin}"), disabled

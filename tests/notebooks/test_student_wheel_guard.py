@@ -31,8 +31,13 @@ def _forge(path: Path, members: list[str]) -> Path:
     return path
 
 
+DATA = "4f9_course_student-0.1.0.data/data/etc/jupyter"
+
+
 def _fit_members() -> list[str]:
-    members = [f"{DIST_INFO}/METADATA", f"{DIST_INFO}/RECORD"]
+    members = [f"{DIST_INFO}/METADATA", f"{DIST_INFO}/RECORD",
+               f"{DATA}/labconfig/page_config.d/4f9-student.json",
+               f"{DATA}/jupyter_server_config.d/zz-4f9-student.json"]
     for module in _library_modules():
         readable = module.endswith("__init__") or module == "course_lib/answers"
         members.append(module + (".py" if readable else SO))
@@ -52,6 +57,8 @@ def test_guard_passes_a_wheel_with_compiled_modules_only(tmp_path):
     ("autograder/exercises/q6_clipping.py", "not part of course_lib"),
     ("notebooks/q6_clipping.ipynb", "not part of course_lib"),
     ("course_lib/q6_clipping.ipynb", "notebook"),
+    (f"{DATA}/jupyter_server_config.d/keys.json", "not part of course_lib"),
+    ("4f9_course_student-0.1.0.data/scripts/clipping.py", "not part of course_lib"),
 ])
 def test_guard_names_each_leak(tmp_path, extra, complaint):
     problems = student_bundle.wheel_problems(_forge(tmp_path / "leak.whl", _fit_members() + [extra]))
