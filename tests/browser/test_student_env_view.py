@@ -69,18 +69,24 @@ def test_student_env_shows_docstring_not_source(page, student_env_lab, artifacts
     panel.locator(".jp-Notebook .jp-Cell").first.wait_for()
     page.locator(".jp-NotebookPanel-toolbar:visible", has_text="Validate").first.wait_for(
         timeout=30_000)
+    # the kernel (started from the student environment) is up before anything is typed
+    page.get_by_text(re.compile(r"\|\s*Idle")).first.wait_for(timeout=180_000)
     # a new cell above the first: where is course_lib, and what does ?? show of a reference
     panel.locator(".jp-Notebook .jp-Cell").first.click()
     page.keyboard.press("Escape")
     page.keyboard.press("a")
     page.keyboard.press("Enter")
+    first = panel.locator(".jp-Notebook .jp-Cell").first
     page.keyboard.type("import course_lib.clipping as reference\nprint(reference.__file__)\n"
                        "reference.clip_polygon??")
+    first.get_by_text("reference.clip_polygon??").wait_for(timeout=30_000)
     page.keyboard.press("Shift+Enter")
-    output = panel.locator(".jp-Notebook .jp-Cell").first.locator(".jp-OutputArea")
-    output.get_by_text("Sutherland-Hodgman").first.wait_for(timeout=120_000)
+    output = first.locator(".jp-OutputArea")
+    try:
+        output.get_by_text("Sutherland-Hodgman").first.wait_for(timeout=180_000)
+    finally:
+        page.screenshot(path=str(artifacts / "student-env-clip-polygon-source.png"))
     text = output.inner_text()
-    page.screenshot(path=str(artifacts / "student-env-clip-polygon-source.png"))
     site = str(studentenv.site_packages())
     assert site in text and ".so" in text, f"course_lib not from the student env:\n{text[:1000]}"
     assert "def clip_polygon" not in text and "Source:" not in text, text[:2000]
