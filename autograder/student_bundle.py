@@ -241,6 +241,8 @@ def build_wheel(cache_dir: Path) -> Path:
         for old in target.parent.iterdir():  # one cached build at a time
             if old.is_dir():
                 shutil.rmtree(old)
+        print(f"compiling the students' wheel into {target} (a minute or two) ...",
+              file=sys.stderr, flush=True)
         with tempfile.TemporaryDirectory(prefix="4f9-student-wheel-") as tmp:
             stage = stage_sources(Path(tmp) / "src", digest)
             wheel = _run_build(stage, Path(tmp) / "dist")
@@ -286,6 +288,7 @@ def ensure_student_env(env_dir: Path, wheel: Path, base_python: str | None = Non
                            capture_output=True)
         stamp = env_dir / ".student-wheel"
         if not stamp.exists() or stamp.read_text() != Path(wheel).name:
+            print(f"installing {Path(wheel).name} into {env_dir} ...", file=sys.stderr, flush=True)
             proc = subprocess.run([str(python), "-m", "pip", "install", "--quiet",
                                    "--disable-pip-version-check", str(wheel)],
                                   capture_output=True, text=True, timeout=BUILD_TIMEOUT,

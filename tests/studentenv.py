@@ -44,7 +44,7 @@ def run(code: str, *args: str, cwd: Path, timeout: int = 900) -> subprocess.Comp
     """Run ``code`` with the student interpreter in isolated mode (``-I``: neither the working
     directory nor ``PYTHON*`` variables reach ``sys.path``), from ``cwd`` (keep it outside the
     repository)."""
-    assert not Path(cwd).resolve().is_relative_to(REPO / "course_lib"), cwd
+    assert not Path(cwd).resolve().is_relative_to(REPO), f"{cwd} is inside the repository"
     return subprocess.run([str(python()), "-I", "-c", code, *args], cwd=cwd, env=env_vars(),
                           capture_output=True, text=True, timeout=timeout, check=False)
 
