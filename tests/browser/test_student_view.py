@@ -1,5 +1,6 @@
 """What a student sees in the browser after ``make lab`` (``python -m autograder lab --role
-student``): the released notebooks, nbgrader's Validate button and Assignments panel, and none of
+student --student-env``, the students' own venv with only their compiled wheel): the released
+notebooks, nbgrader's Validate button and Assignments panel, and none of
 the instructor's tools (Create Assignment, Formgrader)."""
 
 from __future__ import annotations
@@ -20,11 +21,15 @@ pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.xdist_group("br
 
 @pytest.fixture
 def student_lab(tmp_path, repo_root, free_port):
+    import studentenv
+
+    studentenv.python()   # build the wheel and the students' venv before the start-up clock
     port = free_port
     log = open(tmp_path / "lab.log", "w+")
     proc = subprocess.Popen(
         [sys.executable, "-m", "autograder", "lab", "--role", "student", "--port", str(port),
-         "--no-browser", "--course-root", str(tmp_path / "course")],
+         "--no-browser", "--course-root", str(tmp_path / "course"),
+         "--student-env", str(studentenv.ENV_DIR), "--build-cache", str(studentenv.BUILD_CACHE)],
         cwd=repo_root, env=nbgrader_env(), stdout=log, stderr=subprocess.STDOUT, text=True)
     try:
         deadline, url = time.monotonic() + 180, None
