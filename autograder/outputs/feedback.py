@@ -14,6 +14,7 @@ leak. Choice answers are never revealed.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import traceback
 from pathlib import Path
@@ -36,6 +37,10 @@ details{margin:.4em 0}svg{background:#fafafa;border:1px solid #ddd}.legend span{
 CODE_CHARS = 20_000
 #: Characters of printed output shown (counted after HTML escaping).
 PRINTED_CHARS = 5_000
+#: Characters of a page, at most (a page that would be longer drops the code shown back).
+PAGE_CHARS = 1_500_000
+#: Characters of each message on a page that had to be slimmed.
+MESSAGE_CHARS = 2_000
 #: Failing hidden cases listed when revealed.
 REVEAL_ROWS = 20
 
@@ -61,7 +66,20 @@ def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = Fal
 
 
 def render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: bool) -> str:
-    """The feedback page of one student's notebook."""
+    """The feedback page of one student's notebook, under :data:`PAGE_CHARS` whatever the
+    submission: a page that would be longer is drawn again without the code and output shown
+    back, and with each message cut to :data:`MESSAGE_CHARS`."""
+    text = _render(student, notebook, rows, reveal_hidden)
+    if len(text) <= PAGE_CHARS:
+        return text
+    slim = [dataclasses.replace(r, code="", printed="", message=r.message[:MESSAGE_CHARS])
+            for r in rows]
+    return _render(student, notebook, slim, reveal_hidden, note=(
+        "This page would have been too long: your code and its printed output are not shown."))
+
+
+def _render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: bool,
+            note: str = "") -> str:
     auto = [r for r in rows if r.kind is not CellKind.MANUAL]
     manual = [r for r in rows if r.kind is CellKind.MANUAL]
     got = sum(r.score or 0.0 for r in auto)
@@ -71,6 +89,8 @@ def render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: b
         total += (f"; written answers ({sum(r.max_score for r in manual):g} marks) are marked by "
                   "hand")
     body = [f"<h1>{e(notebook)}</h1>", total + "</p>"]
+    if note:
+        body.append(f"<p class='note'>{e(note)}</p>")
     if reveal_hidden:
         body.append("<p class='note'>The failing hidden cases are shown in full (released after "
                     "the deadline).</p>")

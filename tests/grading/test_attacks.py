@@ -53,8 +53,7 @@ import numpy as np
 import pytest
 from gradingtools import (expect_all, expect_full_marks, points_of,
                           SECRET, append_cell, cases_of, cell_index, course_sources,
-                          function_names, model_version, read_grades, run_grade, target_of,
-                          write_nb)
+                          model_version, read_grades, run_grade, target_of, write_nb)
 
 from autograder.exercises import REGISTRY
 
@@ -446,10 +445,9 @@ def _target_is(status: str) -> Callable:
 
 
 def _big_notebook(src):
-    """Finding 6: 2.5 MB of ``a=1`` lines in a plain cell (the parser's ~600 B per byte)."""
+    """Finding 6: 2.5 MB of ``a=1`` lines in the graded cell (the parser takes ~600 B a byte)."""
     nb = model_version(src)
-    nb["cells"].append({"cell_type": "code", "execution_count": None, "metadata": {},
-                        "outputs": [], "source": "a=1\n" * 625_000})
+    append_cell(nb, target_of(src), "a=1\n" * 625_000)
     return nb
 
 
@@ -464,10 +462,13 @@ def _surrogates(src):
 
 
 def _quote_flood(src):
-    """Finding 8: 25,000 ``"`` in every solution cell and written answer (escaped six-fold)."""
+    """Finding 8: 25,000 ``"`` in every solution cell, its output and every written answer
+    (each escaped to six characters)."""
     nb = model_version(src)
-    for name in function_names(src):
-        append_cell(nb, name, "# " + '"' * 25_000)
+    for name, _, _ in src.graded:                # first, so that the cut keeps only quotes
+        cell = nb["cells"][cell_index(nb, name)]
+        cell["source"] = ("# " + '"' * 25_000 + "\n" + cell["source"]
+                          + "\nprint('\"' * 25_000)\n")
     for gid, _ in src.manual:
         nb["cells"][cell_index(nb, gid)]["source"] = '"' * 25_000
     return nb
@@ -483,7 +484,8 @@ SURVIVAL = {
     "rt_big_cell": Attack(_in_target(lambda n: "a=1\n" * 50_000), _target_is("unreadable")),
     "rt_big_notebook": Attack(_big_notebook, lambda src, s: expect_all(src, "unreadable")),
     "rt_surrogate": Attack(_surrogates, lambda src, s: expect_full_marks(src)),
-    "rt_quote_flood": Attack(_quote_flood, lambda src, s: expect_full_marks(src)),
+    "rt_quote_flood": Attack(_quote_flood, lambda src, s: expect_full_marks(src),
+                             "q3_marching_cubes"),   # the most cells: 2.5 MB unless cut
 }
 
 
@@ -826,9 +828,11 @@ def test_every_student_gets_feedback_report_and_gradebook(redteam):
 def test_flooded_code_is_cut_after_escaping(redteam):
     from autograder.outputs.feedback import CODE_CHARS
 
-    path = redteam["root"] / "out" / "feedback" / "rt_quote_flood" / f"{SRC.name}.html"
+    src = _src_of("rt_quote_flood")
+    path = redteam["root"] / "out" / "feedback" / "rt_quote_flood" / f"{src.name}.html"
     raw = path.read_text("utf-8")
     blocks = re.findall(r"<details class='code'><summary>[^<]*</summary><pre>(.*?)</pre>", raw,
                         flags=re.S)
-    assert blocks and all(len(b) <= CODE_CHARS + 1 for b in blocks)
+    assert len(blocks) == len(src.graded) + len(src.manual)
+    assert all(len(b) <= CODE_CHARS + 1 for b in blocks)
     assert path.stat().st_size < 2 * 2**20
