@@ -75,7 +75,8 @@ STATUS_MEANING = {
     Status.UNANSWERED: "no answer was given: the cell was left as released, emptied, or sets the "
                        "answer to None",
     Status.ERROR: "the function raised an exception or crashed its process on some cases, or "
-                  "the name is not defined after running the solution cells",
+                  "the name is not defined after running the solution cells (e.g. its cell "
+                  "does not compile)",
     Status.TIMEOUT: "the function took longer than the time limit on some cases",
     Status.REJECTED_OUTPUT: "the function returned something that is not plain numbers (an "
                             "object of its own class, an array subclass, a result too large)",
@@ -84,7 +85,8 @@ STATUS_MEANING = {
     Status.MISSING: "the notebook was not submitted (or was renamed), or its solution cell is "
                     "gone",
     Status.UNREADABLE: "the notebook file could not be read: invalid JSON, an old notebook "
-                       "format, not a notebook, or far too large",
+                       "format, not a notebook, or far too large (more than 1 MB of code, or "
+                       "a solution cell of more than 100 kB: not run)",
     Status.MANUAL: "a written answer, marked by hand in the Formgrader (no automatic score)",
     Status.GRADER_ERROR: "the grader itself failed on this cell: the instructor must look into "
                          "it (the student is not to blame)",

@@ -11,6 +11,7 @@ grow with what students return, whatever the batch's size.
 
 from __future__ import annotations
 
+import hashlib
 import sys
 import traceback
 from concurrent.futures import ThreadPoolExecutor, as_completed
@@ -23,7 +24,7 @@ from ..isolation import CaseInput, Limits, Mode, NameJob, NotebookJob, run_noteb
 from ..model import (ASSIGNMENT, AnswerHint, Batch, CaseRecord, CellKind, CellResult, NameRun,
                      SourceNotebook, Status, Submission, Verdict)
 from .cases import DrawnCase, case_seed, draw, solution_digest
-from .planning import CellPlan, answer_hint, plan_cells
+from .planning import MAX_CELL_CODE, CellPlan, answer_hint, plan_cells
 from .progress import Progress
 from .reading import MAX_NOTEBOOK_MB, discover_students, read_submission
 
@@ -66,10 +67,7 @@ def grade_batch(submitted: Path, sources: list[SourceNotebook], opts: Options,
     subs: dict[tuple[str, str], Submission] = {}
     for student in students:
         for src in sources:
-            sub = read_submission(submitted / student / ASSIGNMENT, student, src.name,
-                                  opts.max_notebook_mb)
-            subs[(student, src.name)] = sub
-            work = _prepare(student, src, sub, results)
+            work = _read_and_prepare(submitted, student, src, opts, subs, results)
             if work is not None:
                 works.append(work)
     results.extend(_run_all(works, opts))
@@ -79,6 +77,32 @@ def grade_batch(submitted: Path, sources: list[SourceNotebook], opts: Options,
     results.sort(key=lambda r: (r.student, order.get(r.notebook, 99),
                                 cell_order.get((r.notebook, r.grade_id), 999)))
     return Batch(results, subs, list(students))
+
+
+def _read_and_prepare(submitted: Path, student: str, src: SourceNotebook, opts: Options,
+                      subs: dict, results: list[CellResult]) -> NotebookWork | None:
+    """Read and plan one notebook; an internal error gives that notebook ``grader-error`` rows
+    (the traceback on stderr) and never stops the batch."""
+    rows: list[CellResult] = []
+    try:
+        sub = read_submission(submitted / student / ASSIGNMENT, student, src.name,
+                              opts.max_notebook_mb)
+        subs[(student, src.name)] = sub
+        work = _prepare(student, src, sub, rows)
+    except Exception as exc:  # noqa: BLE001 - one broken notebook never stops the batch
+        traceback.print_exc()
+        print(f"error: the grader failed on {student}/{src.name}", file=sys.stderr)
+        results.extend(CellResult(student, src.name, test_id, name, 0.0, points,
+                                  Status.GRADER_ERROR, _grader_failed(exc), kind=_kind(name))
+                       for name, test_id, points in src.graded)
+        return None
+    results.extend(rows)
+    return work
+
+
+def _grader_failed(exc: BaseException) -> str:
+    return (f"the grader failed on this test ({type(exc).__name__}); the instructor will look "
+            "into it")
 
 
 def _prepare(student: str, src: SourceNotebook, sub: Submission,
@@ -101,6 +125,12 @@ def _prepare(student: str, src: SourceNotebook, sub: Submission,
                 student, src.name, test_id, name, 0.0, points, Status.GRADER_ERROR,
                 f"the autograder has no rule for {test_id} (instructor: register {name!r} in "
                 "autograder/exercises)"))
+        elif name in plan.blocked:
+            status, message = plan.blocked[name]
+            code = sub.cells[plan.chosen[name]]["source"]
+            results.append(CellResult(student, src.name, test_id, name, 0.0, points, status,
+                                      message, kind=_kind(name),
+                                      code=code if len(code) <= MAX_CELL_CODE else ""))
         elif name in plan.missing:
             results.append(CellResult(
                 student, src.name, test_id, name, 0.0, points, Status.MISSING,
@@ -160,9 +190,7 @@ def grade_notebook(work: NotebookWork, opts: Options) -> list[CellResult]:
         traceback.print_exc()
         print(f"error: the grader failed on {work.student}/{work.src.name}", file=sys.stderr)
         return [CellResult(work.student, work.src.name, test_id, name, 0.0, points,
-                           Status.GRADER_ERROR, f"the grader failed on this test "
-                           f"({type(exc).__name__}); the instructor will look into it",
-                           kind=_kind(name))
+                           Status.GRADER_ERROR, _grader_failed(exc), kind=_kind(name))
                 for name, test_id, points in work.names]
 
 
@@ -175,13 +203,21 @@ def _prepare_name(work: NotebookWork, name: str,
         drawn = []
         inputs = [CaseInput((), {}, 2**16)]
     else:
-        seed = case_seed(opts.secret, work.student, name, solution_digest(code))
+        seed = case_seed(opts.secret, work.student, name, _digest(code))
         drawn = draw(ex, seed)
         inputs = [CaseInput(tuple(d.case.args), dict(d.case.kwargs), d.result_cap)
                   for d in drawn]
     calls = [(tuple(d.case.args), dict(d.case.kwargs)) for d in drawn[:50]]
     hint = answer_hint(code, name, kind, calls)
     return NameJob(name, ex.kind, list(work.plan.cells), inputs), drawn, hint
+
+
+def _digest(code: str) -> str:
+    """:func:`solution_digest` of ``code``; for a tree too deep to dump, a digest of its text."""
+    try:
+        return solution_digest(code)
+    except (RecursionError, MemoryError):
+        return "text:" + hashlib.sha256(code.encode("utf-8", "replace")).hexdigest()
 
 
 def judge_name(work: NotebookWork, name: str, test_id: str, points: float,

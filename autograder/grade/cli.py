@@ -123,8 +123,13 @@ def _write_outputs(batch, sources, args) -> None:
     out: Path = args.out
     csv_output.write_csv(batch.results, out / "grades.csv")
     feedback.write_all(batch.results, out / "feedback", reveal_hidden=args.reveal_hidden)
-    report.write_report(batch.results, sources, out / "report.html",
-                        references=reference_sources(batch.results), jobs=args.jobs)
+    try:
+        report.write_report(batch.results, sources, out / "report.html",
+                            references=reference_sources(batch.results), jobs=args.jobs)
+    except Exception as exc:  # noqa: BLE001 - the feedback is written; the gradebook follows
+        traceback.print_exc(limit=3)
+        print(f"warning: the report could not be written ({type(exc).__name__})",
+              file=sys.stderr)
     if args.no_gradebook:
         return
     try:

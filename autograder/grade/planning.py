@@ -15,7 +15,39 @@ import re
 from dataclasses import dataclass, field
 
 from ..isolation.child import ALLOWED_COURSE_MODULES, ALLOWED_REFERENCE
-from ..model import AnswerHint, AnswerShape, CellKind, SourceNotebook, Submission
+from ..model import AnswerHint, AnswerShape, CellKind, SourceNotebook, Status, Submission
+
+#: Characters of code in one cell the grader reads (parses, sends to the sandbox): an answer
+#: needs far less, and parsing costs some 600 bytes of memory per character.
+MAX_CELL_CODE = 100_000
+#: What parsing or compiling a student's code may raise: all mean "it cannot be parsed".
+PARSE_ERRORS = (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError)
+
+
+def parse_code(code: str) -> ast.Module | None:
+    """The syntax tree of ``code``, or None when it cannot be parsed (never raises)."""
+    try:
+        return ast.parse(code)
+    except PARSE_ERRORS:
+        return None
+
+
+def compile_problem(code: str) -> str:
+    """Why ``code`` does not compile (``""`` when it does), in a sentence for the student.
+
+    ``def f(a, a)`` parses but does not compile; a sum of 100,000 terms is too deeply nested
+    for Python's compiler.
+    """
+    try:
+        compile(code, "<cell>", "exec", dont_inherit=True)
+    except SyntaxError as exc:
+        where = f" (line {exc.lineno})" if exc.lineno else ""
+        return f"SyntaxError: {exc.msg}{where}"
+    except (RecursionError, MemoryError, OverflowError):
+        return "the code is nested too deeply for Python to compile it"
+    except ValueError as exc:
+        return f"ValueError: {exc}"
+    return ""
 
 
 def to_python(source: str) -> tuple[str | None, str]:
@@ -45,9 +77,8 @@ def to_python(source: str) -> tuple[str | None, str]:
 
 def _bindings(code: str, name: str) -> list[ast.stmt] | None:
     """Top-level statements of ``code`` that bind ``name``; None when it does not parse."""
-    try:
-        tree = ast.parse(code)
-    except (SyntaxError, ValueError):
+    tree = parse_code(code)
+    if tree is None:
         return None
     found = []
     for node in tree.body:
@@ -78,6 +109,8 @@ class CellPlan:
     chosen: dict[str, int]                #: graded name -> index (in sub.cells) of its cell
     by_name: dict[str, int] = field(default_factory=dict)  #: found by definition, not grade_id
     python: dict[int, str] = field(default_factory=dict)   #: index -> the cell as Python
+    #: graded name -> (status, message) when its cell cannot run (too big, does not compile)
+    blocked: dict[str, tuple[Status, str]] = field(default_factory=dict)
 
 
 def plan_cells(src: SourceNotebook, sub: Submission) -> CellPlan:
@@ -93,7 +126,8 @@ def plan_cells(src: SourceNotebook, sub: Submission) -> CellPlan:
         if len(ks) > 1 and gid in notes:
             notes[gid].append(f"the solution cell of {gid} appears {len(ks)} times (a copied "
                               "cell?); all copies ran in notebook order, so the last one counts")
-    python = {k: code for k, c in enumerate(sub.cells) if c["cell_type"] == "code"
+    python = {k: code for k, c in enumerate(sub.cells)
+              if c["cell_type"] == "code" and len(c["source"]) <= MAX_CELL_CODE
               for code in [to_python(c["source"])[0]] if code is not None}
     run = {k: gid for gid, ks in by_id.items() for k in ks}
     plan = CellPlan([], set(), notes, {}, python=python)
@@ -109,9 +143,36 @@ def plan_cells(src: SourceNotebook, sub: Submission) -> CellPlan:
         run[k] = name
         notes[name].append(f"the nbgrader metadata of the solution cell of {name} was missing "
                            "or changed; the cell that defines it was graded instead")
+    _block_unrunnable(sub, plan)
     plan.cells = [(f"{run[k]} (cell {sub.cells[k]['index'] + 1})", python[k])
                   for k in sorted(run) if k in python]
     return plan
+
+
+def _block_unrunnable(sub: Submission, plan: CellPlan) -> None:
+    """Graded cells far too big to read, or that do not compile, are not run: their names get
+    a status and a sentence in ``plan.blocked`` (and the cell leaves ``plan.python``)."""
+    for name, k in plan.chosen.items():
+        cell = sub.cells[k]
+        size = len(cell["source"])
+        if size > MAX_CELL_CODE:
+            plan.blocked[name] = (Status.UNREADABLE, (
+                f"cell {cell['index'] + 1} (the solution of {name}) holds {_size_text(size)} of "
+                f"code, far more than an answer needs (at most {_size_text(MAX_CELL_CODE)}): it "
+                "was not run"))
+        elif k in plan.python:
+            problem = compile_problem(plan.python[k])
+            if problem:
+                plan.blocked[name] = (Status.ERROR, (
+                    f"cell {cell['index'] + 1} (the solution of {name}) does not compile: "
+                    f"{problem}; so {name} is not defined"))
+    for name, k in plan.chosen.items():
+        if name in plan.blocked:
+            plan.python.pop(k, None)
+
+
+def _size_text(chars: int) -> str:
+    return f"{chars / 1e6:.1f} MB" if chars >= 1e6 else f"{chars / 1e3:.0f} kB"
 
 
 def _cell_defining(sub: Submission, python: dict[int, str], taken: dict, name: str) -> int | None:
@@ -131,9 +192,8 @@ def answer_hint(code: str, name: str, kind: CellKind, calls=()) -> AnswerHint:
     ``calls`` are ``(args, kwargs)`` of the exercise's cases, used to check that a ``def`` can
     take them. Returns :attr:`AnswerShape.WRITTEN` whenever the source does not say more.
     """
-    try:
-        tree = ast.parse(code)
-    except (SyntaxError, ValueError):
+    tree = parse_code(code)
+    if tree is None:
         return AnswerHint()
     body = [s for s in tree.body if not _is_constant_expr(s)]
     if not body or all(isinstance(s, ast.Pass) for s in body):
@@ -197,7 +257,10 @@ def _literal_kind(value: ast.expr) -> str:
 
 
 def _arity_hint(label: str, args: ast.arguments, calls) -> AnswerHint:
-    sig = _signature(args)
+    try:
+        sig = _signature(args)
+    except ValueError:  # e.g. a repeated argument name: the cell does not compile
+        return AnswerHint()
     for a, kw in calls:
         try:
             sig.bind(*a, **kw)

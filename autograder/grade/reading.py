@@ -19,6 +19,10 @@ from ..model import ASSIGNMENT, Status, Submission
 from .sources import join_source
 
 MAX_NOTEBOOK_MB = 25.0
+#: Characters of code (all code cells together) a notebook may hold: an answer needs far less,
+#: and the grader's parser costs some 600 bytes of memory per character it reads.
+MAX_NOTEBOOK_CODE = 1_000_000
+_LONE_SURROGATE = re.compile("[\ud800-\udfff]")
 _STUDENT_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._@+-]{0,127}$")
 
 
@@ -54,6 +58,12 @@ def read_submission(folder: Path, student: str, notebook: str,
         sub.message = f"{notebook}.ipynb could not be graded: {why}"
         return sub
     sub.nb, sub.cells = nb, _cells(nb, sub.notes)
+    code = sum(len(c["source"]) for c in sub.cells if c["cell_type"] == "code")
+    if code > MAX_NOTEBOOK_CODE:
+        sub.status = Status.UNREADABLE
+        sub.message = (f"{notebook}.ipynb could not be graded: its code cells hold "
+                       f"{code / 1e6:.1f} MB of code, far more than the answers need (at most "
+                       f"{MAX_NOTEBOOK_CODE / 1e6:g} MB); remove the generated code and resubmit")
     return sub
 
 
@@ -97,6 +107,8 @@ def _parse(data: bytes) -> dict:
         raise _Unreadable("it is not a text file (not UTF-8)") from None
     try:
         nb = json.loads(text)
+    except RecursionError:
+        raise _Unreadable("its JSON is nested too deeply to be a notebook") from None
     except ValueError as exc:
         where = f" (line {exc.lineno}, column {exc.colno})" if hasattr(exc, "lineno") else ""
         raise _Unreadable(f"it is not valid notebook JSON{where}: was it edited in a text editor "
@@ -110,7 +122,31 @@ def _parse(data: bytes) -> dict:
                           "JupyterLab, save it (nbformat 4) and resubmit")
     if type(major) is not int or major > 4 or not isinstance(nb.get("cells"), list):
         raise _Unreadable("it is not a Jupyter notebook in format 4 (no list of cells)")
-    return nb
+    return sanitise(nb) if re.search(r"\\u[dD][89a-fA-F]", text) else nb
+
+
+def sanitise(data):
+    """``data`` (parsed JSON) with every lone surrogate in its strings replaced by U+FFFD.
+
+    JSON may spell a lone surrogate (``"\\udcff"``), which no UTF-8 file can hold: left in, it
+    would stop every page and notebook the grader writes. Walks without recursion.
+    """
+    def clean(v):
+        return _LONE_SURROGATE.sub("\ufffd", v) if isinstance(v, str) else v
+
+    data = clean(data)
+    stack = [data] if isinstance(data, (dict, list)) else []
+    while stack:
+        node = stack.pop()
+        if isinstance(node, dict):
+            for k in list(node):
+                v = node.pop(k)
+                node[clean(k)] = clean(v)
+        else:
+            node[:] = [clean(v) for v in node]
+        stack += [v for v in (node.values() if isinstance(node, dict) else node)
+                  if isinstance(v, (dict, list))]
+    return data
 
 
 def _cells(nb: dict, notes: list[str]) -> list[dict]:

@@ -11,7 +11,7 @@ from ..model import CSV_COLUMNS, CellResult, csv_row
 
 def write_csv(results: list[CellResult], path: Path) -> Path:
     """Write ``results`` (already in the batch's order) to ``path``."""
-    with open(path, "w", newline="", encoding="utf-8") as f:
+    with open(path, "w", newline="", encoding="utf-8", errors="replace") as f:
         writer = csv.DictWriter(f, fieldnames=list(CSV_COLUMNS))
         writer.writeheader()
         for r in results:

@@ -14,12 +14,15 @@ leak. Choice answers are never revealed.
 
 from __future__ import annotations
 
+import dataclasses
+import sys
+import traceback
 from pathlib import Path
 
 import numpy as np
 
 from ..model import VERDICT_WORDS, CaseRecord, CellKind, CellResult, Verdict
-from .html import e, page, plot_data, svg_lines, value_text
+from .html import e, e_clipped, page, plot_data, svg_lines, value_text, write_page
 
 _STYLE = """
 .total{font-size:1.1em;color:#444}.msg{margin:.3em 0 .6em}
@@ -30,10 +33,14 @@ _STYLE = """
 .grader-error{background:#000}.pass{color:#2e7d32}.fail{color:#c62828}
 details{margin:.4em 0}svg{background:#fafafa;border:1px solid #ddd}.legend span{margin-right:1.2em}
 """
-#: Characters of the student's own code shown back.
+#: Characters of the student's own code shown back (counted after HTML escaping).
 CODE_CHARS = 20_000
-#: Characters of printed output shown.
+#: Characters of printed output shown (counted after HTML escaping).
 PRINTED_CHARS = 5_000
+#: Characters of a page, at most (a page that would be longer drops the code shown back).
+PAGE_CHARS = 1_500_000
+#: Characters of each message on a page that had to be slimmed.
+MESSAGE_CHARS = 2_000
 #: Failing hidden cases listed when revealed.
 REVEAL_ROWS = 20
 
@@ -46,14 +53,33 @@ def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = Fal
     written = []
     for (student, notebook), rows in sorted(by_key.items()):
         path = Path(folder) / student / f"{notebook}.html"
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(render(student, notebook, rows, reveal_hidden), encoding="utf-8")
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write_page(path, render(student, notebook, rows, reveal_hidden))
+        except Exception:  # noqa: BLE001 - one bad page never stops the others
+            traceback.print_exc()
+            print(f"error: the feedback of {student}/{notebook} could not be written",
+                  file=sys.stderr)
+            continue
         written.append(path)
     return written
 
 
 def render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: bool) -> str:
-    """The feedback page of one student's notebook."""
+    """The feedback page of one student's notebook, under :data:`PAGE_CHARS` whatever the
+    submission: a page that would be longer is drawn again without the code and output shown
+    back, and with each message cut to :data:`MESSAGE_CHARS`."""
+    text = _render(student, notebook, rows, reveal_hidden)
+    if len(text) <= PAGE_CHARS:
+        return text
+    slim = [dataclasses.replace(r, code="", printed="", message=r.message[:MESSAGE_CHARS])
+            for r in rows]
+    return _render(student, notebook, slim, reveal_hidden, note=(
+        "This page would have been too long: your code and its printed output are not shown."))
+
+
+def _render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: bool,
+            note: str = "") -> str:
     auto = [r for r in rows if r.kind is not CellKind.MANUAL]
     manual = [r for r in rows if r.kind is CellKind.MANUAL]
     got = sum(r.score or 0.0 for r in auto)
@@ -63,6 +89,8 @@ def render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: b
         total += (f"; written answers ({sum(r.max_score for r in manual):g} marks) are marked by "
                   "hand")
     body = [f"<h1>{e(notebook)}</h1>", total + "</p>"]
+    if note:
+        body.append(f"<p class='note'>{e(note)}</p>")
     if reveal_hidden:
         body.append("<p class='note'>The failing hidden cases are shown in full (released after "
                     "the deadline).</p>")
@@ -120,10 +148,10 @@ def _outputs(r: CellResult) -> list[str]:
     if r.code.strip():
         what = "your answer" if r.kind is CellKind.MANUAL else "your code, as graded"
         parts.append(f"<details class='code'><summary>{what}</summary>"
-                     f"<pre>{e(r.code[:CODE_CHARS])}</pre></details>")
+                     f"<pre>{e_clipped(r.code, CODE_CHARS)}</pre></details>")
     if r.printed.strip():
         parts.append("<details><summary>printed output (not graded)</summary>"
-                     f"<pre>{e(r.printed[:PRINTED_CHARS])}</pre></details>")
+                     f"<pre>{e_clipped(r.printed, PRINTED_CHARS)}</pre></details>")
     return parts
 
 

@@ -29,6 +29,7 @@ import json
 import re
 import shutil
 import sys
+import traceback
 import warnings
 from pathlib import Path
 
@@ -154,23 +155,36 @@ def sync(batch: Batch, sources: list[SourceNotebook], submitted: Path, out: Path
                     grade.needs_manual_grade = grade.manual_score is not None
         gb.db.commit()
     for student in batch.students:
-        folder = root / "autograded" / student / ASSIGNMENT
-        folder.mkdir(parents=True, exist_ok=True)
-        ts = Path(submitted) / student / ASSIGNMENT / "timestamp.txt"
-        if ts.is_file() and not ts.is_symlink():
-            shutil.copyfile(ts, folder / "timestamp.txt")
-        results = {}
-        for r in by_student.get(student, []):
-            results.setdefault(r.notebook, {})[r.grade_id] = r
-        for src in sources:
-            sub = batch.submissions.get((student, src.name))
-            if sub is None:
-                continue
+        _write_autograded(batch, sources, student, by_student.get(student, []),
+                          root / "autograded" / student / ASSIGNMENT, Path(submitted))
+    return root
+
+
+def _write_autograded(batch: Batch, sources: list[SourceNotebook], student: str,
+                      rows: list[CellResult], folder: Path, submitted: Path) -> None:
+    """One student's autograded notebooks; a notebook that cannot be written is reported on
+    stderr and never stops the others (nor the other students')."""
+    folder.mkdir(parents=True, exist_ok=True)
+    ts = submitted / student / ASSIGNMENT / "timestamp.txt"
+    if ts.is_file() and not ts.is_symlink():
+        shutil.copyfile(ts, folder / "timestamp.txt")
+    results: dict[str, dict[str, CellResult]] = {}
+    for r in rows:
+        results.setdefault(r.notebook, {})[r.grade_id] = r
+    for src in sources:
+        sub = batch.submissions.get((student, src.name))
+        if sub is None:
+            continue
+        try:
             nb = autograded_notebook(src, sub, results.get(src.name, {}))
-            with open(folder / f"{src.name}.ipynb", "w", encoding="utf-8") as f:
+            with open(folder / f"{src.name}.ipynb", "w", encoding="utf-8",
+                      errors="replace") as f:
                 json.dump(nb, f, indent=1, ensure_ascii=False)
                 f.write("\n")
-    return root
+        except Exception:  # noqa: BLE001 - one bad notebook never stops the others
+            traceback.print_exc()
+            print(f"error: the autograded notebook {student}/{src.name} could not be written",
+                  file=sys.stderr)
 
 
 def _timestamp(folder: Path):

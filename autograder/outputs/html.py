@@ -33,6 +33,26 @@ def e(text) -> str:
     return html.escape(str(text), quote=True)
 
 
+def e_clipped(text, limit: int) -> str:
+    """``text`` escaped for HTML, then cut to at most ``limit`` characters (never inside an
+    entity, an ellipsis added when cut): escaping can multiply a text's length six-fold, so a
+    page is budgeted by what it holds, not by what the student wrote."""
+    escaped = e(str(text)[:limit])
+    if len(escaped) <= limit:
+        return escaped
+    cut = escaped[:limit]
+    amp = cut.rfind("&")
+    if amp > cut.rfind(";"):
+        cut = cut[:amp]
+    return cut + "…"
+
+
+def write_page(path, text: str) -> None:
+    """Write ``text`` as UTF-8; a character UTF-8 cannot hold (a lone surrogate) becomes ``?``."""
+    with open(path, "w", encoding="utf-8", errors="replace") as f:
+        f.write(text)
+
+
 def page(title: str, body: list[str], style: str = "") -> str:
     """A complete, self-contained HTML page."""
     head = (f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>{e(title)}"

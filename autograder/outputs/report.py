@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from ..model import STATUS_MEANING, CellKind, CellResult, SourceNotebook, Status
-from .html import e, page
+from .html import e, page, write_page
 from .similarity import find_pasted_references, find_similar, render_section
 
 _STYLE = """
@@ -31,7 +31,7 @@ def write_report(results: list[CellResult], sources: list[SourceNotebook], path:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(render(results, sources, references, jobs), encoding="utf-8")
+    write_page(path, render(results, sources, references, jobs))
     return path
 
 

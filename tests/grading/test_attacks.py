@@ -405,6 +405,90 @@ class Attack:
     notebook: str = ""         # the source notebook attacked (default: the first one)
 
 
+# --------------------------------------------------------------------------------------------
+# submissions that once stopped the batch or bloated the grader (red-team findings 4-8)
+
+def _sum_of_ones(terms: int) -> str:
+    return "_x = " + "+".join(["1"] * terms) + "\n"
+
+
+def _deep_plain_cells(src):
+    """Finding 4: the target's nbgrader metadata gone (so planning reads every plain cell) and
+    plain cells too deeply nested for Python's parser (one beyond the size cap, one under it)."""
+    name = target_of(src)
+    nb = model_version(src)
+    nb["cells"][cell_index(nb, name)]["metadata"].pop("nbgrader")
+    for terms in (100_000, 30_000):
+        nb["cells"].append({"cell_type": "code", "execution_count": None, "metadata": {},
+                            "outputs": [], "source": _sum_of_ones(terms)})
+    return nb
+
+
+def _in_target(extra_of: Callable) -> Callable:
+    def build(src):
+        nb = model_version(src)
+        append_cell(nb, target_of(src), extra_of(target_of(src)))
+        return nb
+    return build
+
+
+def _target_only(code_of: Callable) -> Callable:
+    def build(src):
+        nb = model_version(src)
+        nb["cells"][cell_index(nb, target_of(src))]["source"] = code_of(target_of(src))
+        return nb
+    return build
+
+
+def _target_is(status: str) -> Callable:
+    return lambda src, student: _named_status(target_of(src), status)(src, student)
+
+
+def _big_notebook(src):
+    """Finding 6: 2.5 MB of ``a=1`` lines in the graded cell (the parser takes ~600 B a byte)."""
+    nb = model_version(src)
+    append_cell(nb, target_of(src), "a=1\n" * 625_000)
+    return nb
+
+
+def _surrogates(src):
+    """Findings 5/5b: lone surrogates early in a cell and after its 20,000th character."""
+    nb = model_version(src)
+    append_cell(nb, target_of(src), "# \udcff\n#" + "x" * 20_001 + " \udcff\n")
+    if src.manual:
+        gid = src.manual[0][0]
+        nb["cells"][cell_index(nb, gid)]["source"] += "\n\udcff"
+    return nb
+
+
+def _quote_flood(src):
+    """Finding 8: 25,000 ``"`` in every solution cell, its output and every written answer
+    (each escaped to six characters)."""
+    nb = model_version(src)
+    for name, _, _ in src.graded:                # first, so that the cut keeps only quotes
+        cell = nb["cells"][cell_index(nb, name)]
+        cell["source"] = ("# " + '"' * 25_000 + "\n" + cell["source"]
+                          + "\nprint('\"' * 25_000)\n")
+    for gid, _ in src.manual:
+        nb["cells"][cell_index(nb, gid)]["source"] = '"' * 25_000
+    return nb
+
+
+SURVIVAL = {
+    "rt_deep_plain": Attack(_deep_plain_cells, lambda src, s: expect_full_marks(src)),
+    "rt_deep_graded": Attack(_in_target(lambda n: _sum_of_ones(30_000)), _target_is("error")),
+    "rt_deep_digest": Attack(_in_target(lambda n: _sum_of_ones(2_000)),
+                             lambda src, s: expect_full_marks(src)),
+    "rt_dup_arg": Attack(_target_only(lambda n: f"def {n}(a, a):\n    return 0\n"),
+                         _target_is("error")),
+    "rt_big_cell": Attack(_in_target(lambda n: "a=1\n" * 50_000), _target_is("unreadable")),
+    "rt_big_notebook": Attack(_big_notebook, lambda src, s: expect_all(src, "unreadable")),
+    "rt_surrogate": Attack(_surrogates, lambda src, s: expect_full_marks(src)),
+    "rt_quote_flood": Attack(_quote_flood, lambda src, s: expect_full_marks(src),
+                             "q3_marching_cubes"),   # the most cells: 2.5 MB unless cut
+}
+
+
 def _back_door(table: dict, status: str) -> dict[str, Attack]:
     return {student: Attack(_replace(name, code), _named_status(name, status), nb)
             for student, (nb, name, code) in table.items()}
@@ -439,6 +523,7 @@ ATTACKS: dict[str, Attack] = {
     # special layouts, built in the fixture
     "rt_symlink_folder": Attack(None, lambda src, s: expect_all(src, "unreadable")),
     "rt_symlink_passwd": Attack(None, lambda src, s: expect_all(src, "unreadable")),
+    **SURVIVAL,
 }
 ODD_IDS = ["bad id;rm -rf", "-rf", "\u00fcn\u00efc\u00f6de", ".hidden"]
 SOURCES = {s.name: s for s in _ALL}
@@ -706,3 +791,48 @@ def test_two_grading_runs_at_once_are_both_right(tmp_path):
                 assert float(row["score"]) == pytest.approx(score, abs=1e-6), (k, student, gid)
                 if status is not None:
                     assert row["status"] == status, (k, student, gid, row["message"])
+
+
+# --------------------------------------------------------------------------------------------
+# the batch survives any submission (findings 4-8): every output for everyone, sentences
+
+
+def test_no_submission_causes_a_grader_error(redteam):
+    errors = {k: r["message"] for k, r in redteam["rows"].items() if r["status"] == "grader-error"}
+    assert not errors
+
+
+def test_uncompilable_and_oversized_cells_say_why(redteam):
+    name = target_of(SRC)
+    row = redteam["rows"]
+    assert "duplicate argument" in row[("rt_dup_arg", SRC.name, f"test_{name}")]["message"]
+    assert "nested too deeply" in row[("rt_deep_graded", SRC.name, f"test_{name}")]["message"]
+    assert "kB of code" in row[("rt_big_cell", SRC.name, f"test_{name}")]["message"]
+    assert "MB of code" in row[("rt_big_notebook", SRC.name, f"test_{name}")]["message"]
+
+
+def test_every_student_gets_feedback_report_and_gradebook(redteam):
+    from autograder.outputs.gradebook import course_root
+
+    root = redteam["root"]
+    out = root / "out"
+    course = course_root(root / "submitted", out)
+    assert "Similar solutions" in (out / "report.html").read_text("utf-8")
+    for student in [*ATTACKS, "rt_raw_memory"]:
+        assert (out / "feedback" / student / f"{SRC.name}.html").is_file(), student
+        auto = course / "autograded" / student / "tripos2006" / f"{SRC.name}.ipynb"
+        assert auto.is_file(), student
+    assert "\ufffd" in _page(redteam, "rt_surrogate", SRC.name, with_code=True)
+
+
+def test_flooded_code_is_cut_after_escaping(redteam):
+    from autograder.outputs.feedback import CODE_CHARS
+
+    src = _src_of("rt_quote_flood")
+    path = redteam["root"] / "out" / "feedback" / "rt_quote_flood" / f"{src.name}.html"
+    raw = path.read_text("utf-8")
+    blocks = re.findall(r"<details class='code'><summary>[^<]*</summary><pre>(.*?)</pre>", raw,
+                        flags=re.S)
+    assert len(blocks) == len(src.graded) + len(src.manual)
+    assert all(len(b) <= CODE_CHARS + 1 for b in blocks)
+    assert path.stat().st_size < 2 * 2**20
