@@ -48,7 +48,7 @@ def similar_solutions_html(results: list[CellResult], references: Mapping[str, s
     jobs = max(1, jobs)
     found = find_similar(cells, references or {}, jobs=jobs)
     seen = {(m.left, m.name) for m in found if m.is_reference}
-    code = {s: "\n\n".join(c for _, c in sorted(per.items())) for s, per in everywhere.items()}
+    code = {s: [c for _, c in sorted(per.items())] for s, per in everywhere.items()}
     found += [m for m in find_pasted_references(code, references or {}, jobs=jobs)
               if (m.left, m.name) not in seen]
     return render_section(found)

@@ -404,29 +404,40 @@ def find_similar(cells: Mapping[str, Mapping[str, str]], references: Mapping[str
                                  min_tokens=min_tokens)
 
 
-def find_pasted_references(code: Mapping[str, str], references: Mapping[str, str], *,
+def find_pasted_references(code: Mapping[str, Iterable[str]], references: Mapping[str, str], *,
                            threshold: float = THRESHOLD, min_tokens: int = MIN_TOKENS,
                            k: int = K_GRAM, window: int = WINDOW, jobs: int = 1) -> list[Match]:
     """Students whose solution code *anywhere* holds a reference (issue 11.3, red-team case).
 
     :func:`find_similar` compares each graded name's own cell with its reference; a reference
     pasted into another cell (behind a helper the graded cell calls) escapes it. Here ``code`` is
-    ``{student: all of that student's solution code}`` and every reference is looked for in all
-    of it, by containment (the share of the reference's fingerprints found), so the code around
-    the paste does not hide it.
+    ``{student: that student's graded cells' sources}``; each cell is fingerprinted on its own
+    (so memory stays bounded by the largest cell) and every reference is looked for in the union
+    of a student's fingerprints, by containment, so the code around the paste does not hide it.
+    The evidence shown is the student's cell that shares the most with the reference.
     """
     if not isinstance(code, Mapping) or not isinstance(references, Mapping):
         raise ValueError("code and references must be mappings")
     _check_positive_int(min_tokens=min_tokens, k=k, window=window, jobs=jobs)
-    code = {s: src for s, src in code.items() if isinstance(src, str) and src.strip()}
+    cells = {s: [c for c in srcs if isinstance(c, str) and c.strip()] for s, srcs in code.items()}
     references = {n: r for n, r in references.items() if isinstance(r, str)}
-    prints = fingerprint_all(set(code.values()) | set(references.values()), k, window, jobs)
-    kept = {s: prints[src] for s, src in sorted(code.items()) if prints[src] is not None}
+    prints = fingerprint_all({c for cs in cells.values() for c in cs} | set(references.values()),
+                             k, window, jobs)
     found: list[Match] = []
-    for name, ref_source in sorted(references.items()):
-        ref = prints.get(ref_source)
-        if ref is not None and ref.tokens >= min_tokens:
-            found += _reference_matches(name, kept, code, ref_source, ref, threshold)
+    for student, sources in sorted(cells.items()):
+        mine = [(src, prints[src]) for src in sources if prints[src] is not None]
+        if not mine:
+            continue
+        union = np.unique(np.concatenate([fp.prints for _, fp in mine]))
+        for name, ref_source in sorted(references.items()):
+            ref = prints.get(ref_source)
+            if ref is None or ref.tokens < min_tokens:
+                continue
+            score = np.intersect1d(ref.prints, union, assume_unique=True).size / ref.prints.size
+            if score >= threshold:
+                src, fp = max(mine, key=lambda item: containment(ref, item[1]))
+                left, right = shared_lines(fp, ref)
+                found.append(Match(name, student, REFERENCE, score, src, ref_source, left, right))
     found.sort(key=lambda m: (-m.score, m.name, m.left))
     return found
 

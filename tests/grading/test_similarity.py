@@ -444,7 +444,7 @@ def test_a_reference_pasted_into_another_cell_is_flagged(tmp_path):
     results = [row("erin", "ring_hole_positions", stub),
                row("erin", "q2b_energy_window", elsewhere, CellKind.CHOICE),
                row("frank", "ring_hole_positions", HAND_WRITTEN)]
-    found = sim.find_pasted_references({"erin": stub + "\n" + elsewhere, "frank": HAND_WRITTEN},
+    found = sim.find_pasted_references({"erin": [stub, elsewhere], "frank": [HAND_WRITTEN]},
                                        {"ring_hole_positions": ref})
     assert [(m.left, m.name) for m in found] == [("erin", "ring_hole_positions")]
     assert found[0].is_reference and found[0].score >= sim.THRESHOLD
