@@ -10,11 +10,13 @@ Inside the sandbox this process is the *supervisor*: it never runs student code.
 1. limits itself (rlimits are inherited and cannot be raised again), becomes non-dumpable (so
    a worker of the same uid can neither ptrace it nor open its descriptors via ``/proc``);
 2. executes the instructor's setup cell (trusted, from the source notebook);
-3. for each graded name forks a *worker* that executes the name's cells (under the load time
+3. for each graded name forks a *worker* that executes the name's cells (all within ONE load time
    limit), looks the name up and runs the cases, each under an alarm, with its prints captured,
    and streams each case's encoded result to the supervisor over a pipe;
 4. forwards the worker's records to the ONE channel the grader reads, restarts a crashed or
-   hung worker for the remaining cases (at most ``max_launches`` processes per name), and kills
+   hung worker for the remaining cases (at most ``max_launches`` processes per name) under
+   deadlines of its own that no record of a worker can move (a fixed one per case, a hard end
+   per name and per notebook, ``job_timeout``), and kills
    every leftover process between names. When it is PID 1 of its own PID namespace (the
    sandbox), ``kill(-1, SIGKILL)`` cannot reach it, and clears everything else.
 

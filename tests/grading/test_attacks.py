@@ -491,8 +491,10 @@ def redteam(tmp_path_factory, template_gradebook):
     (root / "out").mkdir()
     shutil.copyfile(template_gradebook, root / "out" / "gradebook.db")
     t0 = time.monotonic()
+    # after the deadline (--reveal-hidden): the attempts' prints, the evidence that each ran,
+    # are in the feedback (before it, a notebook with hidden cases shows none of its prints)
     proc = run_grade(sub, root / "out", "--db-url", f"sqlite:///{root / 'out' / 'gradebook.db'}",
-                     secret_file=root / "secret")
+                     "--reveal-hidden", secret_file=root / "secret")
     return {"root": root, "rows": read_grades(root / "out"), "proc": proc,
             "elapsed": time.monotonic() - t0}
 
@@ -839,13 +841,15 @@ def test_fake_start_frames_do_not_beat_the_time_limit(hold):
     # the 6 s first case is a timeout; every other case is answered in time and right
     assert float(row["score"]) == pytest.approx(pts * (n - 1) / n, abs=1e-6)
     assert row["status"] == "timeout"
-    others = {gid: r for (s, _, gid), r in hold["rows"].items()
-              if s == "rt_extend" and gid not in ("test_normalize",) and r["status"] != "manual"}
+    others = {gid: r for (s, nb, gid), r in hold["rows"].items()
+              if s == "rt_extend" and nb == "q5_phong" and gid != "test_normalize"
+              and r["status"] != "manual"}
     assert others and all(r["status"] == "ok" for r in others.values()), others
 
 
 def test_a_slow_notebook_stops_at_the_job_time_limit(hold):
-    rows = {gid: r for (s, _, gid), r in hold["rows"].items() if s == "rt_slow"}
+    rows = {gid: r for (s, nb, gid), r in hold["rows"].items()
+            if s == "rt_slow" and nb == "q5_phong"}
     for name in ("normalize", "reflect", "phong", "halfway", "blinn_phong"):
         assert float(rows[f"test_{name}"]["score"]) == 0.0
     assert any("the notebook used up its time" in r["message"] for r in rows.values())
