@@ -11,7 +11,6 @@ grow with what students return, whatever the batch's size.
 
 from __future__ import annotations
 
-import hashlib
 import sys
 import traceback
 from concurrent.futures import ThreadPoolExecutor, as_completed
@@ -23,7 +22,7 @@ from ..exercises import REGISTRY
 from ..isolation import CaseInput, Limits, Mode, NameJob, NotebookJob, run_notebook
 from ..model import (ASSIGNMENT, AnswerHint, Batch, CaseRecord, CellKind, CellResult, NameRun,
                      SourceNotebook, Status, Submission, Verdict)
-from .cases import DrawnCase, case_seed, draw, solution_digest
+from .cases import DrawnCase, case_seed, draw, notebook_digest
 from .planning import MAX_CELL_CODE, CellPlan, answer_hint, plan_cells
 from .progress import Progress
 from .reading import MAX_NOTEBOOK_MB, discover_students, read_submission
@@ -183,8 +182,11 @@ def grade_notebook(work: NotebookWork, opts: Options) -> list[CellResult]:
         job = NotebookJob(f"{work.student}--{work.src.name}", work.src.setup_source,
                           [p[0] for p in prepared.values()])
         runs = run_notebook(job, opts.limits, opts.mode)
+        held_hidden = any(not d.case.visible for _job, drawn, _hint in prepared.values()
+                          for d in drawn)
         return [judge_name(work, name, test_id, points, prepared[name][1], prepared[name][2],
-                           runs.get(name), opts.reveal_hidden)
+                           runs.get(name), opts.reveal_hidden,
+                           show_output=opts.reveal_hidden or not held_hidden)
                 for name, test_id, points in work.names]
     except Exception as exc:  # noqa: BLE001 - one broken notebook never stops the batch
         traceback.print_exc()
@@ -203,7 +205,8 @@ def _prepare_name(work: NotebookWork, name: str,
         drawn = []
         inputs = [CaseInput((), {}, 2**16)]
     else:
-        seed = case_seed(opts.secret, work.student, name, _digest(code))
+        digest = notebook_digest(source for _label, source in work.plan.cells)
+        seed = case_seed(opts.secret, work.student, name, digest)
         drawn = draw(ex, seed)
         inputs = [CaseInput(tuple(d.case.args), dict(d.case.kwargs), d.result_cap)
                   for d in drawn]
@@ -212,18 +215,14 @@ def _prepare_name(work: NotebookWork, name: str,
     return NameJob(name, ex.kind, list(work.plan.cells), inputs), drawn, hint
 
 
-def _digest(code: str) -> str:
-    """:func:`solution_digest` of ``code``; for a tree too deep to dump, a digest of its text."""
-    try:
-        return solution_digest(code)
-    except (RecursionError, MemoryError):
-        return "text:" + hashlib.sha256(code.encode("utf-8", "replace")).hexdigest()
-
-
 def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
                drawn: list[DrawnCase], hint: AnswerHint, run: NameRun | None,
-               reveal: bool) -> CellResult:
-    """The :class:`CellResult` of one graded name from what its run returned."""
+               reveal: bool, show_output: bool = True) -> CellResult:
+    """The :class:`CellResult` of one graded name from what its run returned.
+
+    ``show_output`` False (a job that held hidden inputs, before the deadline): nothing the
+    student's code printed or wrote into a message reaches the feedback (red-team finding 1).
+    """
     ex = REGISTRY[name]
     kind = CellKind(ex.kind)
     code = work.sub.cells[work.plan.chosen[name]]["source"]
@@ -231,32 +230,53 @@ def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
         return CellResult(work.student, work.src.name, test_id, name, 0.0, points,
                           Status.GRADER_ERROR, "the sandbox returned nothing for this test; "
                           "the instructor will look into it", kind=kind, code=code)
-    records = _records(ex, kind, drawn, run)
+    records = _records(ex, kind, drawn, run, show_output)
+    load_notes = _load_notes(run, show_output)
     score, status, message = judging.summarise(records, points, kind)
     if hint.reference and kind is CellKind.FUNCTION:
         score, status, message = 0.0, *judging.reference_imported(name, hint.reference)
     elif score == 0 and status is not Status.REFERENCE_USED:
-        why = "; ".join(judging.clip(n, 200) for n in run.load_notes[-3:])
+        why = "; ".join(judging.clip(n, 200) for n in load_notes[-3:])
         override = judging.unanswered_or_broken(name, kind, hint, run.defined, why)
         if override is not None:
             status, message = override
     notes = list(work.plan.notes.get(name, []))
     if notes:
         message += ". Note: " + "; ".join(notes)
-    printed = _printed(run, records, reveal)
+    printed = _printed(run, records, reveal) if show_output else _hidden_printed(run, records)
     return CellResult(work.student, work.src.name, test_id, name, score, points, status,
                       message, kind=kind, cases=[_kept(r, reveal) for r in records],
-                      printed=printed, notes=notes + list(run.load_notes),
+                      printed=printed, notes=notes + load_notes,
                       seconds=run.seconds, code=code)
 
 
-def _records(ex, kind: CellKind, drawn: list[DrawnCase], run: NameRun) -> list[CaseRecord]:
+#: What stands for the student's own text while hidden tests are not revealed.
+HIDDEN_OUTPUT = ("not shown before the deadline, because this notebook has hidden tests; run "
+                 "your notebook yourself to see it")
+
+
+def _load_notes(run: NameRun, show: bool) -> list[str]:
+    """The notes of running the cells (their text is the student's: error messages, names)."""
+    if show or not run.load_notes:
+        return list(run.load_notes)
+    return [f"{len(run.load_notes)} message(s) from running your cells: {HIDDEN_OUTPUT}"]
+
+
+def _hidden_printed(run: NameRun, records: list[CaseRecord]) -> str:
+    printed = run.printed.strip() or any(r.printed.strip() for r in records)
+    return f"(what your code printed is {HIDDEN_OUTPUT})" if printed else ""
+
+
+def _records(ex, kind: CellKind, drawn: list[DrawnCase], run: NameRun,
+             show: bool = True) -> list[CaseRecord]:
     if kind is CellKind.CHOICE:
         verdict, reason = judging.judge_choice(ex, run.outcomes[0])
         return [CaseRecord(0, "your answer", True, verdict, reason)]
     records = []
     for i, (d, outcome) in enumerate(zip(drawn, run.outcomes, strict=True)):
         verdict, reason = judging.judge_case(ex, d.case, d.expected, outcome)
+        if verdict is Verdict.REFERENCE_USED and not (show or d.case.visible):
+            reason = "used the course's reference (not available while grading)"
         received = outcome.value if verdict in (Verdict.PASS, Verdict.WRONG_VALUE,
                                                 Verdict.WRONG_SHAPE) else None
         records.append(CaseRecord(

@@ -1,11 +1,15 @@
 """The cases each student's graded names are run on, and what the sandbox may send back.
 
 Hidden cases come from a generator seeded with HMAC-SHA256 of the course secret over the
-assignment, the student, the graded name and a digest of the student's *normalised* solution
-source for that name (:func:`solution_digest`: its syntax tree, so comments and spacing do not
-count). Re-grading the same submission draws the same cases (same CSV, feedback, report);
-re-grading a *changed* function draws new ones, so a table of hidden inputs printed on one run
-gains nothing on the next (issue 10).
+assignment, the student, the graded name and a digest of ALL the student's solution code that
+runs for that notebook (:func:`notebook_digest`: every planned cell's syntax tree, so comments
+and spacing do not count). Re-grading the same submission draws the same cases (same CSV,
+feedback, report); a change to ANY solution cell of the notebook (the graded function's, a
+helper's, a choice's) draws new hidden cases for every name, so a table of hidden inputs
+printed on one run, wherever it lives, gains nothing on the next (red-team finding 1).
+
+Every case of a name has the same result cap (:func:`name_cap`), so the cap says nothing about
+any one case's answer (finding 3).
 """
 
 from __future__ import annotations
@@ -23,15 +27,24 @@ from ..model import ASSIGNMENT
 
 #: Bytes every case may return beyond four times its expected answer's size.
 RESULT_SLACK = 16 * 2**10
+#: The smallest result cap of a graded name (a power of two).
+CAP_FLOOR = 64 * 2**10
 
 
 def solution_digest(code: str) -> str:
-    """SHA-256 of a solution's syntax tree (its text, spaces collapsed, if it does not parse)."""
+    """SHA-256 of a solution's syntax tree (its text, spaces collapsed, if it does not parse or
+    is nested too deeply to dump)."""
     try:
         text = ast.dump(ast.parse(code), annotate_fields=False)
-    except (SyntaxError, ValueError):
-        text = " ".join(code.split())
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        text = "text:" + " ".join(code.split())
     return hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
+
+
+def notebook_digest(sources) -> str:
+    """SHA-256 over :func:`solution_digest` of every solution cell that runs, in order."""
+    joined = "\n".join(solution_digest(code) for code in sources)
+    return hashlib.sha256(joined.encode("ascii")).hexdigest()
 
 
 def case_seed(secret: bytes, student: str, name: str, digest: str = "") -> int:
@@ -42,7 +55,8 @@ def case_seed(secret: bytes, student: str, name: str, digest: str = "") -> int:
 
 @dataclass
 class DrawnCase:
-    """One case with the reference's answer (None where the case must raise)."""
+    """One case with the reference's answer (None where the case must raise) and its name's
+    result cap (the same for every case of the name)."""
 
     case: Case
     expected: object
@@ -63,7 +77,17 @@ def draw(ex: Exercise, seed: int) -> list[DrawnCase]:
                       "case skipped", file=sys.stderr)
                 continue
         drawn.append(DrawnCase(case, expected, result_cap(expected)))
+    cap = name_cap(d.result_cap for d in drawn)
+    for d in drawn:
+        d.result_cap = cap
     return drawn
+
+
+def name_cap(caps) -> int:
+    """ONE result cap for all of a name's cases: the largest case's, rounded up to a power of
+    two, never below :data:`CAP_FLOOR` (so it reveals no single case's answer)."""
+    largest = max(caps, default=0)
+    return max(CAP_FLOOR, 1 << max(0, int(largest) - 1).bit_length())
 
 
 def result_cap(expected) -> int:

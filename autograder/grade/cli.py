@@ -54,6 +54,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="folder of the source notebooks (default: the course's notebooks/)")
     add("--load-timeout", type=float, default=None, help="seconds allowed for the setup and "
         "solution cells (default 30 + the per-case time limit)")
+    add("--job-timeout", type=float, default=600.0, help="seconds one student's notebook may "
+        "take in all (every graded name, every restart; default 600): cases not reached by "
+        "then are not run")
     add("--memory-mb", type=int, default=2048,
         help="memory limit of each sandbox, in MB (default 2048)")
     add("--max-notebook-mb", type=float, default=MAX_NOTEBOOK_MB,
@@ -82,7 +85,7 @@ def _mode(args) -> Mode | None:
 def _options(args, secret: bytes, mode: Mode) -> Options:
     limits = Limits(case_timeout=args.timeout,
                     load_timeout=args.load_timeout if args.load_timeout else 30.0 + args.timeout,
-                    memory_mb=args.memory_mb)
+                    memory_mb=args.memory_mb, job_timeout=args.job_timeout)
     return Options(out=args.out, jobs=max(1, args.jobs), limits=limits, secret=secret,
                    reveal_hidden=args.reveal_hidden, mode=mode,
                    max_notebook_mb=args.max_notebook_mb, progress=not args.quiet)

@@ -10,11 +10,13 @@ Inside the sandbox this process is the *supervisor*: it never runs student code.
 1. limits itself (rlimits are inherited and cannot be raised again), becomes non-dumpable (so
    a worker of the same uid can neither ptrace it nor open its descriptors via ``/proc``);
 2. executes the instructor's setup cell (trusted, from the source notebook);
-3. for each graded name forks a *worker* that executes the name's cells (under the load time
+3. for each graded name forks a *worker* that executes the name's cells (all within ONE load time
    limit), looks the name up and runs the cases, each under an alarm, with its prints captured,
    and streams each case's encoded result to the supervisor over a pipe;
 4. forwards the worker's records to the ONE channel the grader reads, restarts a crashed or
-   hung worker for the remaining cases (at most ``max_launches`` processes per name), and kills
+   hung worker for the remaining cases (at most ``max_launches`` processes per name) under
+   deadlines of its own that no record of a worker can move (a fixed one per case, a hard end
+   per name and per notebook, ``job_timeout``), and kills
    every leftover process between names. When it is PID 1 of its own PID namespace (the
    sandbox), ``kill(-1, SIGKILL)`` cannot reach it, and clears everything else.
 
@@ -413,12 +415,15 @@ class Capture:
 
 
 def _load_cells(nj: dict, ns: dict, limits: dict, send) -> str:
-    """Execute the name's cells in order, each under the load time limit, each failure a
-    note. Returns what of ``course_lib`` a failing cell tried to use (``""`` if none)."""
+    """Execute the name's cells in order, all of them within ONE load time limit, each failure
+    a note. Returns what of ``course_lib`` a failing cell tried to use (``""`` if none)."""
     reference = ""
+    end = time.monotonic() + float(limits["load_timeout"])   # ONE budget for all the cells
     for label, source in nj["cells"]:
         send({"t": "cell", "name": nj["name"], "label": label})
-        note, ref = _run_cell(label, source, ns, float(limits["load_timeout"]))
+        left = end - time.monotonic()
+        note, ref = _run_cell(label, source, ns, left) if left > 0.05 else \
+            (f"cell {label} was not run: the cells before it used up the time limit", "")
         reference = reference or ref
         if note:
             send({"t": "note", "name": nj["name"], "text": note})
@@ -436,8 +441,8 @@ def _run_cell(label: str, source: str, ns: dict, timeout: float) -> tuple[str, s
         finally:
             signal.setitimer(signal.ITIMER_REAL, 0)
     except CaseTimeout:
-        return f"cell {label} was stopped after {timeout:g} s (an endless loop at its top " \
-               "level?)", ""
+        return f"cell {label} was stopped: the solution cells together used up their time " \
+               "limit (an endless loop at a cell's top level?)", ""
     except SystemExit as exc:
         return f"cell {label} called sys.exit({_safe_str(exc, 100)}): ignored", ""
     except BaseException as exc:  # noqa: BLE001 - student code may raise anything
@@ -582,6 +587,14 @@ PR_SET_PDEATHSIG = 1
 PR_SET_DUMPABLE = 4
 
 
+def name_budget(limits: dict, n_cases: int) -> float:
+    """The most wall seconds one graded name may take: every launch's load budget and every
+    case's time limit (the grader's job budget adds these up)."""
+    load = float(limits["load_timeout"]) + GRACE
+    case = float(limits["case_timeout"]) + GRACE
+    return int(limits["max_launches"]) * load + max(1, n_cases) * case
+
+
 def kill_leftovers(worker_pid: int | None) -> None:
     """Kill every process of the job but this one (as PID 1 of the sandbox: ``kill(-1)``;
     elsewhere the worker's process group) and reap them."""
@@ -614,9 +627,14 @@ class NameSupervisor:
     """Runs one graded name: launches workers, forwards their records, fills in the cases a
     dead or hung worker could not report."""
 
-    def __init__(self, nj: dict, ns: dict, limits: dict, channel: int):
+    def __init__(self, nj: dict, ns: dict, limits: dict, channel: int,
+                 job_deadline: float = float("inf")):
         self.nj, self.ns, self.limits, self.channel = nj, ns, limits, channel
         self.n = len(nj["cases"])
+        #: the hard end of this name: its own budget, never beyond the notebook's
+        self.hard = min(job_deadline, time.monotonic() + name_budget(limits, self.n))
+        self.job_deadline = job_deadline
+        self.deadlines: dict = {}  # case index -> its deadline, fixed once set
         self.next = 0              # the first case without an outcome
         self.launches = 0
         self.timeouts = 0          # timeouts in a row
@@ -642,6 +660,9 @@ class NameSupervisor:
     def run(self) -> None:
         self.emit({"t": "name"})
         while self.next < self.n or self.launches == 0:
+            if time.monotonic() >= self.hard:
+                self.settle_rest("not-run", self.out_of_time())
+                break
             if self.launches >= int(self.limits["max_launches"]):
                 self.settle_rest("not-run", f"not run: the process died {self.launches} times")
                 break
@@ -681,9 +702,26 @@ class NameSupervisor:
         caps = [int(c["cap"]) for c in self.nj["cases"]] or [0]
         return record_cap(max(caps), int(self.limits["output_bytes"]))
 
+    def out_of_time(self) -> str:
+        """Why the cases left have no result once the name's or the notebook's time is up."""
+        if time.monotonic() >= self.job_deadline:
+            return (f"not run: the notebook used up its time ({self.limits['job_timeout']:g} s "
+                    "for all its cells and cases)")
+        return "not run: this test used up its time (every restart included)"
+
+    def case_deadline(self, i: int, now: float) -> float:
+        """Case ``i``'s deadline, fixed the first time it is asked for (nothing the worker
+        sends can move it)."""
+        if i not in self.deadlines:
+            self.deadlines[i] = now + float(self.limits["case_timeout"]) + GRACE
+        return min(self.deadlines[i], self.hard)
+
     def watch(self, reader: FrameReader) -> bool:
+        """Forward one worker's records. The deadlines are the supervisor's: ONE for loading
+        all the cells, one per case (fixed when the case is first due: after loading or after
+        the previous case's result), and the name's hard end; frames cannot move them."""
         loading, started = True, time.monotonic()
-        deadline = started + float(self.limits["load_timeout"]) + GRACE
+        deadline = min(started + float(self.limits["load_timeout"]) + GRACE, self.hard)
         while True:
             event, payload = reader.next(deadline, self.worker_alive)
             if event != "record":
@@ -692,31 +730,38 @@ class NameSupervisor:
             t, now = rec.get("t"), time.monotonic()
             if rec.get("name") != self.nj["name"]:
                 return self.failed("garbage", loading, started)
-            if t == "cell" and loading:   # each cell has the load time limit
+            if t == "cell" and loading:   # the label only: the load deadline stays
                 self.label = str(rec.get("label"))[:100]
-                deadline = now + float(self.limits["load_timeout"]) + GRACE
             elif t == "note" and loading:
                 if self.launches == 1:
                     self.emit({"t": "note", "text": str(rec.get("text"))[:2000]})
             elif t == "loaded" and loading:
-                loading, deadline = False, now + float(self.limits["case_timeout"]) + GRACE
+                loading, started = False, now
+                deadline = self.case_deadline(self.next, now)
                 if self.launches == 1:
                     self.emit({"t": "loaded", "defined": rec.get("defined") is True,
                                "printed": str(rec.get("printed"))[:2 * self.limits["output_bytes"]]})
             elif t == "start" and not loading and rec.get("i") == self.next:
-                started, deadline = now, now + float(self.limits["case_timeout"]) + GRACE
+                deadline = self.case_deadline(self.next, now)
             elif t == "case" and not loading and rec.get("i") == self.next:
-                write_all(self.channel, raw)
-                self.timeouts = self.timeouts + 1 if rec.get("kind") == "timeout" else 0
-                self.next += 1
-                if self.timeouts >= TIMEOUTS_IN_A_ROW:
-                    self.settle_rest("not-run", f"not run: the {TIMEOUTS_IN_A_ROW} cases "
-                                                "before it timed out")
+                if not self.forward_case(rec, raw):
                     return False
+                started, deadline = now, self.case_deadline(self.next, now)
             elif t == "done" and not loading:
                 return False
             else:
                 return self.failed("garbage", loading, started)
+
+    def forward_case(self, rec: dict, raw: bytes) -> bool:
+        """Pass case ``self.next``'s result on; False when the rest of the name is not run."""
+        write_all(self.channel, raw)
+        self.timeouts = self.timeouts + 1 if rec.get("kind") == "timeout" else 0
+        self.next += 1
+        if self.timeouts >= TIMEOUTS_IN_A_ROW:
+            self.settle_rest("not-run", f"not run: the {TIMEOUTS_IN_A_ROW} cases "
+                                        "before it timed out")
+            return False
+        return True
 
     def worker_alive(self) -> bool:
         """False once the worker has exited (its wait status is kept)."""
@@ -742,10 +787,14 @@ class NameSupervisor:
         why = self.exit_status(1.0) if event == "eof" else ""
         kill_leftovers(self.pid)
         spent = time.monotonic() - started
+        if event == "timeout" and time.monotonic() >= self.hard:
+            self.settle_rest("not-run", self.out_of_time())
+            return False
         if loading:
             if event == "timeout":
-                self.settle_rest("timeout", f"cell {self.label} did not finish within "
-                                            f"{self.limits['load_timeout']:g} s")
+                self.settle_rest("timeout", f"the cells did not finish within "
+                                            f"{self.limits['load_timeout']:g} s (cell "
+                                            f"{self.label} was running)")
             elif event == "eof":
                 self.settle_rest("crashed", f"crashed while running cell {self.label}: {why}")
             else:
@@ -824,6 +873,7 @@ def main(argv: list) -> None:
     with open(opts["--job"], "rb") as f:
         job = json.loads(f.read())
     limits = job["limits"]
+    job_deadline = time.monotonic() + float(limits["job_timeout"])
     _set_rlimits(limits, float(limits["budget_seconds"]))
     # the interpreter's own standard library, then the site dir (NumPy, the allowed tables)
     stdlib = [p for p in sys.path if p.startswith(sys.base_prefix + os.sep)]
@@ -837,7 +887,7 @@ def main(argv: list) -> None:
     for note in run_setup(job["setup"], ns, float(limits["load_timeout"])):
         write_all(channel, frame({"t": "note", "name": None, "text": note}))
     for nj in job["names"]:
-        NameSupervisor(nj, ns, limits, channel).run()
+        NameSupervisor(nj, ns, limits, channel, job_deadline).run()
     write_all(channel, frame({"t": "done"}))
     os._exit(0)
 

@@ -20,7 +20,8 @@ class Limits:
     """Resource limits of one job (the defaults suit the course's exercises)."""
 
     case_timeout: float = 10.0    #: wall seconds per case
-    load_timeout: float = 40.0    #: wall seconds for the setup cell, and for each solution cell
+    load_timeout: float = 40.0    #: wall seconds for the setup cell, and for ALL of a name's cells
+    job_timeout: float = 600.0    #: wall seconds for the whole notebook (every name, every restart)
     memory_mb: int = 2048         #: the WHOLE job (all its processes, incl. its tmpfs scratch)
     scratch_mb: int = 64          #: size of the private tmpfs (/tmp, HOME, cwd)
     pids: int = 64                #: processes + threads of the whole job
@@ -28,7 +29,7 @@ class Limits:
     max_launches: int = 3         #: worker processes per name (restarts after a crash)
 
     def __post_init__(self):
-        for name in ("case_timeout", "load_timeout"):
+        for name in ("case_timeout", "load_timeout", "job_timeout"):
             if not float(getattr(self, name)) > 0:
                 raise ValueError(f"Limits.{name} must be a positive number of seconds")
         for name in ("memory_mb", "scratch_mb", "pids", "output_bytes", "max_launches"):

@@ -27,13 +27,15 @@ from .jobs import Limits, NotebookJob, validate_job
 
 #: Seconds the sandbox may take to start (mounts, the interpreter, NumPy) beyond the limits.
 STARTUP_SECONDS = 15.0
+#: Seconds per name the supervisor may spend clearing processes after the name's time is up.
+CLEANUP_SECONDS = 6.0
 NOTE_CHARS = 2000               #: characters kept of one load note
 #: The shell line that puts the sandbox into its cgroup(s) before anything in it starts.
 JOIN_CGROUP = 'while [ "$1" != -- ]; do echo $$ > "$1" || exit 125; shift; done; shift; exec "$@"'
 #: Why the cases the child never reported have no result, by how the channel ended.
 ENDINGS = {
     "done": (OutcomeKind.NOT_RUN, "not reported by the sandbox"),
-    "timeout": (OutcomeKind.NOT_RUN, "not run: the job's time ran out"),
+    "timeout": (OutcomeKind.NOT_RUN, "not run: the notebook used up its time"),
     "too-large": (OutcomeKind.REJECTED, "result too large"),
     "garbage": (OutcomeKind.REJECTED, "the sandbox's output was not understood"),
     "eof": (OutcomeKind.CRASHED, "the sandbox ended before this case"),
@@ -41,13 +43,14 @@ ENDINGS = {
 
 
 def job_budget(job: NotebookJob, limits: Limits) -> float:
-    """Wall seconds the whole job may take (the supervisor's own limits, every restart)."""
-    per_cell = limits.load_timeout + child.GRACE
-    total = STARTUP_SECONDS + per_cell
+    """Wall seconds the whole job may take: the supervisor's own limits (the setup cell, then
+    per name :func:`child.name_budget <autograder.isolation.child.name_budget>`), never more
+    than ``limits.job_timeout``, plus the time to start the sandbox and to clear processes."""
+    lim = {k: getattr(limits, k) for k in Limits.__dataclass_fields__}
+    total = limits.load_timeout + child.GRACE
     for nj in job.names:
-        total += limits.max_launches * per_cell * max(1, len(nj.cells))
-        total += len(nj.cases) * (limits.case_timeout + child.GRACE + 0.5)
-    return total
+        total += child.name_budget(lim, len(nj.cases)) + 0.5 * len(nj.cases)
+    return STARTUP_SECONDS + min(total, limits.job_timeout) + CLEANUP_SECONDS * len(job.names)
 
 
 def _text(value, cap: int) -> str:

@@ -13,8 +13,8 @@ source notebook and produce
 
 Everything the tests compare against is decided here, independently of the grader: the points
 come from the source notebook, the case counts from the registry with the grader's documented
-seed (:func:`autograder.grade.cases.case_seed` over the student, the name and the digest of the
-student's solution cell for it, :func:`autograder.grade.cases.solution_digest`).
+seed (:func:`autograder.grade.cases.case_seed` over the student, the name and the digest of ALL
+the student's solution cells that run, :func:`autograder.grade.cases.notebook_digest`).
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from autograder.exercises import REGISTRY
-from autograder.grade.cases import case_seed, solution_digest
+from autograder.grade.cases import case_seed, notebook_digest
 from autograder.grade.planning import to_python
 from autograder.grade.sources import load_source
 
@@ -159,6 +159,14 @@ def solution_code(nb: dict, name: str) -> str:
     return to_python(_src_text(cells[-1]))[0] or ""
 
 
+def solution_codes(nb: dict) -> list[str]:
+    """Every solution code cell of ``nb`` (by its nbgrader metadata), in notebook order, as the
+    grader runs it: the cells whose digest seeds the hidden cases."""
+    codes = [to_python(_src_text(c))[0] for c in nb["cells"]
+             if c["cell_type"] == "code" and _meta(c).get("solution") and not _meta(c).get("grade")]
+    return [code for code in codes if code is not None]
+
+
 def cases_of(student: str, name: str, nb, secret: bytes = SECRET):
     """The cases the grader draws for ``student`` whose notebook is ``nb`` (a dict, or the path
     of the submitted file) with the grader's documented seeding."""
@@ -167,7 +175,7 @@ def cases_of(student: str, name: str, nb, secret: bytes = SECRET):
         return [None]
     if not isinstance(nb, dict):
         nb = json.loads(Path(nb).read_text(encoding="utf-8"))
-    seed = case_seed(secret, student, name, solution_digest(solution_code(nb, name)))
+    seed = case_seed(secret, student, name, notebook_digest(solution_codes(nb)))
     return ex.draw_cases(np.random.default_rng(seed))
 
 

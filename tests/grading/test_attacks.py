@@ -576,8 +576,10 @@ def redteam(tmp_path_factory, template_gradebook):
     (root / "out").mkdir()
     shutil.copyfile(template_gradebook, root / "out" / "gradebook.db")
     t0 = time.monotonic()
+    # after the deadline (--reveal-hidden): the attempts' prints, the evidence that each ran,
+    # are in the feedback (before it, a notebook with hidden cases shows none of its prints)
     proc = run_grade(sub, root / "out", "--db-url", f"sqlite:///{root / 'out' / 'gradebook.db'}",
-                     secret_file=root / "secret")
+                     "--reveal-hidden", secret_file=root / "secret")
     return {"root": root, "rows": read_grades(root / "out"), "proc": proc,
             "elapsed": time.monotonic() - t0}
 
@@ -737,9 +739,9 @@ def lookup(tmp_path_factory):
 
 
 def test_hidden_inputs_were_never_shown(lookup):
-    cases = cases_of("spy", "phong", lookup["first"])
-    visible = sum(c.visible for c in cases)
-    assert lookup["page"].count("ARGS-SEEN") == visible, "only visible cases' output is shown"
+    # a notebook with hidden cases shows none of its code's prints before the deadline
+    assert "ARGS-SEEN" not in lookup["page"]
+    assert "not shown before the deadline" in lookup["page"]
 
 
 def test_a_lookup_table_of_the_hidden_cases_gains_nothing(lookup):
@@ -753,6 +755,199 @@ def test_a_lookup_table_of_the_hidden_cases_gains_nothing(lookup):
     pts = points_of(lookup["src"], "phong")
     assert float(row["score"]) == pytest.approx(pts * passing / len(cases), abs=1e-6)
     assert passing < len(cases), "the table does not get full marks"
+
+
+# --------------------------------------------------------------------------------------------
+# the lookup table behind a helper in ANOTHER cell; the sandbox's /job printed at load time
+# (red-team finding 1): the phong cell itself never changes
+
+CHOICE = "colour_aliasing_cause"
+DELEGATE = "def phong(*args, **kwargs):\n    return _rt_impl(*args, **kwargs)\n"
+PRINT_JOB = "print('JOB-DUMP', open('/job').read()[:3000])\n"
+
+
+def cell_of(nb: dict, name: str) -> str:
+    source = nb["cells"][cell_index(nb, name)]["source"]
+    return source if isinstance(source, str) else "".join(source)
+
+
+def _elsewhere_notebook(src, helper: str) -> dict:
+    nb = model_version(src)
+    model_phong = cell_of(nb, "phong")
+    nb["cells"][cell_index(nb, "phong")]["source"] = DELEGATE
+    append_cell(nb, CHOICE, model_phong.replace("def phong(", "def _rt_impl(") + "\n" + helper)
+    return nb
+
+
+@pytest.fixture(scope="module")
+def elsewhere(tmp_path_factory):
+    src = SOURCES.get("q5_phong")
+    if src is None:
+        pytest.skip("q5_phong is not in the course")
+    root = tmp_path_factory.mktemp("elsewhere")
+    (root / "secret").write_bytes(SECRET + b"\n")
+    path = root / "submitted" / "rt_elsewhere" / "tripos2006" / "q5_phong.ipynb"
+    first = _elsewhere_notebook(src, PRINT_JOB)
+    write_nb(path, first)
+    run_grade(root / "submitted", root / "out1", "--no-gradebook", secret_file=root / "secret")
+    page = html.unescape((root / "out1" / "feedback" / "rt_elsewhere" / "q5_phong.html")
+                         .read_text())
+    page = re.sub(r"<details class='code'>.*?</details>", "", page, flags=re.S)
+    ns: dict = {"np": np}
+    exec(KEY_SRC, ns)
+    ex = REGISTRY["phong"]
+    table = {ns["_key"](c.args, c.kwargs): ("RAISE" if c.raises is not None
+                                            else np.asarray(ex.expected(c)).tolist())
+             for c in cases_of("rt_elsewhere", "phong", first)}   # a perfect leak, say
+    helper = (KEY_SRC + f"_TABLE = {table!r}\n"
+              "def _rt_impl(*args, **kwargs):\n"
+              "    hit = _TABLE.get(_key(args, kwargs))\n"
+              "    if hit == 'RAISE':\n"
+              "        raise ValueError('from the table')\n"
+              "    return np.array(hit, dtype=float) if hit is not None else np.zeros(3)\n")
+    second = _elsewhere_notebook(src, helper)
+    write_nb(path, second)
+    run_grade(root / "submitted", root / "out2", "--no-gradebook", secret_file=root / "secret")
+    return {"page": page, "first": first, "second": second, "key": ns["_key"], "table": table,
+            "rows1": read_grades(root / "out1"), "rows2": read_grades(root / "out2"), "src": src}
+
+
+def test_the_job_printed_at_load_time_is_not_in_the_feedback(elsewhere):
+    row = elsewhere["rows1"][("rt_elsewhere", "q5_phong", "test_phong")]
+    assert float(row["score"]) == pytest.approx(points_of(elsewhere["src"], "phong"), abs=1e-6)
+    assert "JOB-DUMP" not in elsewhere["page"] and '"cases"' not in elsewhere["page"]
+
+
+def test_a_table_in_another_cell_gains_nothing(elsewhere):
+    cases = cases_of("rt_elsewhere", "phong", elsewhere["second"])
+    key = elsewhere["key"]
+    first_hidden = {key(c.args, c.kwargs) for c in
+                    cases_of("rt_elsewhere", "phong", elsewhere["first"]) if not c.visible}
+    # the phong cell is the same in both rounds: only the seed over every cell redraws
+    assert cell_of(elsewhere["first"], "phong") == cell_of(elsewhere["second"], "phong")
+    assert {key(c.args, c.kwargs) for c in cases if not c.visible} - first_hidden
+    passing = sum(key(c.args, c.kwargs) in elsewhere["table"] for c in cases)
+    assert passing < len(cases)
+    row = elsewhere["rows2"][("rt_elsewhere", "q5_phong", "test_phong")]
+    pts = points_of(elsewhere["src"], "phong")
+    assert float(row["score"]) == pytest.approx(pts * passing / len(cases), abs=1e-6)
+
+
+# --------------------------------------------------------------------------------------------
+# the result cap as an oracle (finding 3), fake frames against the time limit (3b), a notebook
+# that holds its grading slot (10); a correct victim in the same batch
+
+CAP_ORACLE = """
+import json, importlib.util
+_spec = importlib.util.spec_from_file_location("_wire", "/sandbox/child.py")
+_wire = importlib.util.module_from_spec(_spec); _spec.loader.exec_module(_wire)
+_JOB = json.load(open("/job"))
+def _expected_is_none(args):
+    for nj in _JOB["names"]:
+        for c in nj["cases"] if nj["name"] == "normalize" else ():
+            got = _wire.decode_value(c["args"], _wire.Budget(1 << 40))
+            if len(got) == len(args) and all(np.array_equal(a, b) for a, b in zip(got, args)):
+                return c["cap"] == 4 * 32 + 16 * 1024
+    return False
+def normalize(v):
+    if _expected_is_none((v,)):
+        raise ValueError("the grader told me so")
+    v = np.asarray(v, dtype=float)
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+"""
+EXTEND = """
+import json, os, signal, stat, struct, time
+def normalize(v):
+    signal.setitimer(signal.ITIMER_REAL, 0)          # the worker's own alarm: off
+    t0, first = time.monotonic(), not os.path.exists("/tmp/once")
+    open("/tmp/once", "w").close()                   # the sandbox's scratch: only once
+    while first and time.monotonic() - t0 < 6:       # the first call: 6 s, over the limit
+        time.sleep(0.3)
+        data = json.dumps({"t": "start", "name": "normalize", "i": 0}).encode()
+        for fd in range(3, 32):
+            try:
+                if stat.S_ISFIFO(os.fstat(fd).st_mode):
+                    os.write(fd, struct.pack(">I", len(data)) + data)
+            except OSError:
+                pass
+    v = np.asarray(v, dtype=float)
+    if v.ndim == 0 or np.any(np.linalg.norm(v, axis=-1) == 0):
+        raise ValueError("no direction")
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+"""
+SLOW = "import time\n_slow_{0} = {0}\ndef {0}(*args, **kwargs):\n    time.sleep(1.0)\n" \
+       "    return 'slow'\n"
+HOLD_JOB_TIMEOUT = 15
+
+
+def _phong_with(edits: dict) -> dict:
+    nb = model_version(SOURCES["q5_phong"])
+    for name, code in edits.items():
+        append_cell(nb, name, code)
+    return nb
+
+
+@pytest.fixture(scope="module")
+def hold(tmp_path_factory):
+    src = SOURCES.get("q5_phong")
+    if src is None:
+        pytest.skip("q5_phong is not in the course")
+    root = tmp_path_factory.mktemp("hold")
+    sub = root / "submitted"
+    nbs = {"rt_cap_oracle": _phong_with({"normalize": CAP_ORACLE}),
+           "rt_extend": _phong_with({"normalize": EXTEND}),
+           "rt_slow": _phong_with({n: SLOW.format(n) for n in
+                                   ("normalize", "reflect", "phong", "halfway", "blinn_phong")}),
+           "zz_victim": model_version(src)}
+    for student, nb in nbs.items():
+        write_nb(sub / student / "tripos2006" / "q5_phong.ipynb", nb)
+    (root / "secret").write_bytes(SECRET + b"\n")
+    t0 = time.monotonic()
+    run_grade(sub, root / "out", "--no-gradebook", "--job-timeout", str(HOLD_JOB_TIMEOUT),
+              secret_file=root / "secret")
+    return {"rows": read_grades(root / "out"), "elapsed": time.monotonic() - t0, "nbs": nbs,
+            "src": src}
+
+
+def test_the_result_cap_tells_nothing(hold):
+    raising, n = _raising_fraction("rt_cap_oracle", "normalize", hold["nbs"]["rt_cap_oracle"])
+    row = hold["rows"][("rt_cap_oracle", "q5_phong", "test_normalize")]
+    pts = points_of(hold["src"], "normalize")
+    assert raising >= 1
+    # the naive answer is right exactly where no ValueError is due, as without the oracle
+    assert float(row["score"]) == pytest.approx(pts * (n - raising) / n, abs=1e-6)
+    assert row["status"] == "failed"
+
+
+def test_fake_start_frames_do_not_beat_the_time_limit(hold):
+    row = hold["rows"][("rt_extend", "q5_phong", "test_normalize")]
+    n = len(cases_of("rt_extend", "normalize", hold["nbs"]["rt_extend"]))
+    pts = points_of(hold["src"], "normalize")
+    # the 6 s first case is a timeout; every other case is answered in time and right
+    assert float(row["score"]) == pytest.approx(pts * (n - 1) / n, abs=1e-6)
+    assert row["status"] == "timeout"
+    others = {gid: r for (s, nb, gid), r in hold["rows"].items()
+              if s == "rt_extend" and nb == "q5_phong" and gid != "test_normalize"
+              and r["status"] != "manual"}
+    assert others and all(r["status"] == "ok" for r in others.values()), others
+
+
+def test_a_slow_notebook_stops_at_the_job_time_limit(hold):
+    rows = {gid: r for (s, nb, gid), r in hold["rows"].items()
+            if s == "rt_slow" and nb == "q5_phong"}
+    for name in ("normalize", "reflect", "phong", "halfway", "blinn_phong"):
+        assert float(rows[f"test_{name}"]["score"]) == 0.0
+    assert any("the notebook used up its time" in r["message"] for r in rows.values())
+    # the whole batch took about one job time limit, not 5 names x ~15 cases x 1 s
+    assert hold["elapsed"] < HOLD_JOB_TIMEOUT + 60
+
+
+def test_the_victim_in_the_same_batch_is_unaffected(hold):
+    for gid, (score, status) in expect_full_marks(hold["src"]).items():
+        row = hold["rows"][("zz_victim", "q5_phong", gid)]
+        assert row["status"] == status, (gid, row["message"])
+        if score is not None:
+            assert float(row["score"]) == pytest.approx(score, abs=1e-6), gid
 
 
 # --------------------------------------------------------------------------------------------

@@ -712,7 +712,11 @@ def test_hidden_cases_show_only_counts_without_reveal(bank):
 def test_snooping_reads_and_writes_nothing(bank):
     for nb_name in SOURCES:
         page = html.unescape(_feedback(bank, f"adv_snoop-{nb_name}", nb_name))
-        assert "BLOCKED read" in page, "the attempts ran and their output was captured"
+        # before the deadline a notebook with hidden cases shows none of its prints (they could
+        # hold the sandbox's inputs): only that there were some; test_attacks.py reads them
+        # after the deadline (--reveal-hidden)
+        assert "BLOCKED read" in page or "printed is not shown before the deadline" in page, \
+            "the attempts ran and their output was captured"
         assert "LEAK" not in page
 
 

@@ -318,7 +318,7 @@ def test_the_job_budget_kills_the_whole_sandbox(mode, monkeypatch):
     runs = run(mode, who, sleeper, limits=Limits(case_timeout=120.0))
     assert time.monotonic() - t0 < 20
     assert kinds(runs["sleeper"]) == [K.NOT_RUN, K.NOT_RUN]
-    assert runs["sleeper"].outcomes[0].message == "not run: the job's time ran out"
+    assert runs["sleeper"].outcomes[0].message == "not run: the notebook used up its time"
     assert processes_left(runs["who"].outcomes[0].value) == []
 
 
@@ -532,8 +532,9 @@ def test_time_limits_and_crashes(mode):
     assert runs["slow"].outcomes[4].printed == "case 4\n"
     assert runs["slow"].launches == 3
     assert kinds(runs["hang"]) == [K.TIMEOUT] * 3 + [K.NOT_RUN] * 2
-    assert "t1" in runs["top"].load_notes[0]
-    assert kinds(runs["top"]) == [K.RETURNED] and runs["top"].outcomes[0].value == "ok"
+    # ONE load budget for all of a name's cells: t1 uses it up, so t2 never runs
+    assert "t1" in runs["top"].load_notes[0] and "t2 was not run" in runs["top"].load_notes[1]
+    assert kinds(runs["top"]) == [K.NOT_RUN]
 
 
 GRADER_RSS = """
@@ -702,3 +703,68 @@ def test_cost_of_a_job(mode):
         runs = run_notebook(job, FAST, mode)
         print(f"{job.job_id}: {time.perf_counter() - t0:.3f} s")
     assert all(kinds(r) == [K.RETURNED] * 10 for r in runs.values())
+
+
+# ------------------------------------------------------------------------------------------
+# deadlines the worker cannot move (red-team findings 3b and 10)
+
+KEEPALIVE = """
+import json, os, signal, stat, struct, time
+def _fake(record):
+    # student code writes the supervisor's own frames to its result pipe
+    data = json.dumps(record).encode()
+    for fd in range(3, 32):
+        try:
+            if stat.S_ISFIFO(os.fstat(fd).st_mode):
+                os.write(fd, struct.pack(">I", len(data)) + data)
+        except OSError:
+            pass
+"""
+
+
+def test_fake_start_frames_do_not_extend_a_case(mode):
+    extend = fn("extend", KEEPALIVE + """
+def extend(i):
+    signal.setitimer(signal.ITIMER_REAL, 0)          # the worker's own alarm: off
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 8:
+        time.sleep(0.2)
+        _fake({"t": "start", "name": "extend", "i": i})
+    return "late"
+""", cases=[(0,)])
+    t0 = time.monotonic()
+    runs = run(mode, extend, limits=Limits(case_timeout=1.0, load_timeout=5.0))
+    assert kinds(runs["extend"]) == [K.TIMEOUT]
+    assert time.monotonic() - t0 < 8
+
+
+def test_fake_cell_frames_do_not_extend_the_load(mode):
+    body = KEEPALIVE + """
+signal.setitimer(signal.ITIMER_REAL, 0)
+_t0 = time.monotonic()
+while time.monotonic() - _t0 < 10:
+    time.sleep(0.2)
+    _fake({"t": "cell", "name": "slowload", "label": "x"})
+def slowload():
+    return 1
+"""
+    job = NameJob("slowload", "function", [("a", body), ("b", "pass\n")], [CaseInput((), {})])
+    t0 = time.monotonic()
+    runs = run(mode, job, limits=Limits(case_timeout=1.0, load_timeout=2.0))
+    assert kinds(runs["slowload"]) == [K.TIMEOUT]
+    assert time.monotonic() - t0 < 10
+
+
+def test_the_notebook_has_one_hard_time_limit(mode):
+    slow = "import time\ndef {0}(k):\n    time.sleep(0.5)\n    return k\n"
+    first = fn("first", slow.format("first"), cases=[(k,) for k in range(30)])
+    second = fn("second", slow.format("second"), cases=[(k,) for k in range(30)])
+    t0 = time.monotonic()
+    runs = run(mode, first, second,
+               limits=Limits(case_timeout=2.0, load_timeout=5.0, job_timeout=4.0))
+    assert time.monotonic() - t0 < 4.0 + 15.0          # far below 60 cases x 0.5 s
+    done = [o.value for o in runs["first"].outcomes if o.kind is K.RETURNED]
+    assert 1 <= len(done) < 30 and done == list(range(len(done)))
+    assert kinds(runs["second"]) == [K.NOT_RUN] * 30
+    assert "the notebook used up its time" in runs["second"].outcomes[0].message
+    assert "the notebook used up its time" in runs["first"].outcomes[-1].message

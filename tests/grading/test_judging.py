@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from autograder.exercises.base import Case, Exercise, close, wrong_shape
-from autograder.grade.cases import case_seed, result_cap, solution_digest
+from autograder.grade.cases import (CAP_FLOOR, case_seed, name_cap, notebook_digest, result_cap,
+                                    solution_digest)
 from autograder.grade.planning import answer_hint, reference_import
 from autograder.judging import judge_case, judge_choice, summarise, unanswered_or_broken
 from autograder.model import (AnswerHint, AnswerShape, CaseOutcome, CaseRecord, CellKind, OutcomeKind,
@@ -102,6 +103,24 @@ def test_hidden_seed_follows_the_solution_not_its_comments():
     assert a != solution_digest("def f(x):\n    return -x\n")
     assert case_seed(b"s", "kim", "f", a) != case_seed(b"s", "kim", "f", solution_digest("x=1"))
     assert case_seed(b"s", "kim", "f", a) == case_seed(b"s", "kim", "f", a)
+
+
+def test_hidden_seed_follows_every_solution_cell_of_the_notebook():
+    f, helper = "def f(x):\n    return _impl(x)\n", "def _impl(x):\n    return x\n"
+    base = notebook_digest([helper, f])
+    assert base == notebook_digest([helper + "# a comment\n", f])       # comments do not count
+    changed = notebook_digest([helper.replace("return x", "return -x"), f])  # ANOTHER cell
+    assert case_seed(b"s", "kim", "f", base) != case_seed(b"s", "kim", "f", changed)
+    assert base != notebook_digest([helper, f, "table = 1\n"])           # an added cell
+
+
+def test_one_result_cap_per_name_reveals_no_case():
+    # the cap is a power of two, at least the floor, and the same whatever the smaller cases
+    caps = [result_cap(None), result_cap(np.zeros(10_000))]
+    cap = name_cap(caps)
+    assert cap == name_cap([caps[1]]) == name_cap([caps[1], result_cap(np.zeros(3))])
+    assert cap >= max(caps) and cap & (cap - 1) == 0
+    assert name_cap([result_cap(None)]) == name_cap([result_cap(1.0)]) == CAP_FLOOR
 
 
 def test_result_cap_follows_the_expected_answer():
