@@ -1,0 +1,109 @@
+"""Judging and planning on their own (no sandbox): verdicts come from structured fields, the
+source of a graded cell says whether it was answered (issue 9), seeds follow the solution."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from autograder.exercises.base import Case, Exercise, close, wrong_shape
+from autograder.grade.cases import case_seed, result_cap, solution_digest
+from autograder.grade.planning import answer_hint, reference_import
+from autograder.judging import judge_case, judge_choice, summarise, unanswered_or_broken
+from autograder.model import (AnswerHint, AnswerShape, CaseOutcome, CaseRecord, CellKind, OutcomeKind,
+                              Status, Verdict)
+
+CASE = Case(args=(1.0,), label="one")
+
+
+def _ex(compare):
+    return Exercise(name="f", notebook="qx", reference=lambda x: x, compare=compare)
+
+
+def _returned(value):
+    return CaseOutcome(0, OutcomeKind.RETURNED, value=value)
+
+
+def test_a_shape_mismatch_is_classified_by_its_kind_not_its_words():
+    verdict, _ = judge_case(_ex(close()), CASE, np.zeros(3), _returned(np.zeros(2)))
+    assert verdict is Verdict.WRONG_SHAPE
+    # a plain string that merely says "wrong shape" is a wrong value: words are not parsed
+    verdict, why = judge_case(_ex(lambda e, r: "wrong shape, says the text"), CASE, 1.0,
+                              _returned(2.0))
+    assert verdict is Verdict.WRONG_VALUE and why == "wrong shape, says the text"
+    verdict, _ = judge_case(_ex(lambda e, r: wrong_shape("no")), CASE, 1.0, _returned(2.0))
+    assert verdict is Verdict.WRONG_SHAPE
+
+
+def test_the_released_stub_is_unanswered_by_its_exception_class():
+    raised = CaseOutcome(0, OutcomeKind.RAISED, error_type="NotImplementedError",
+                         error_mro=("builtins.NotImplementedError", "builtins.RuntimeError",
+                                    "builtins.Exception"))
+    assert judge_case(_ex(close()), CASE, 1.0, raised)[0] is Verdict.UNANSWERED
+    bad = Case(args=(-1.0,), raises=ValueError)
+    ok = CaseOutcome(0, OutcomeKind.RAISED, error_type="ValueError",
+                     error_mro=("builtins.ValueError", "builtins.Exception"))
+    assert judge_case(_ex(close()), bad, None, ok)[0] is Verdict.PASS
+
+
+@pytest.mark.parametrize("value,verdict", [
+    (None, Verdict.UNANSWERED), ("", Verdict.UNANSWERED), (" , ", Verdict.UNANSWERED),
+    (3, Verdict.WRONG_SHAPE), (("a",), Verdict.WRONG_SHAPE), ("(b)", Verdict.WRONG_SHAPE),
+    ("a", Verdict.WRONG_VALUE), (" B ", Verdict.PASS)])
+def test_choices_are_judged_with_the_course_format(value, verdict):
+    ex = Exercise(name="q", notebook="qx", kind="choice", answer="b", options=tuple("abcd"))
+    assert judge_choice(ex, _returned(value))[0] is verdict
+
+
+def test_score_is_points_times_the_fraction_passed():
+    records = [CaseRecord(i, "", True, v) for i, v in
+               enumerate([Verdict.PASS, Verdict.PASS, Verdict.WRONG_VALUE, Verdict.TIMEOUT])]
+    score, status, _ = summarise(records, 2.0)
+    assert score == pytest.approx(1.0) and status is Status.TIMEOUT
+
+
+@pytest.mark.parametrize("code,shape", [
+    ("def f(x):\n    '''doc'''\n    # YOUR CODE HERE\n    raise NotImplementedError()\n",
+     AnswerShape.UNTOUCHED),
+    ("# YOUR CODE HERE\nraise NotImplementedError()\n", AnswerShape.UNTOUCHED),
+    ("", AnswerShape.EMPTY), ("# later\n", AnswerShape.EMPTY),
+    ("f = None\n", AnswerShape.NONE), ("f = 3\n", AnswerShape.NOT_A_FUNCTION),
+    ("f = [1, 2]\n", AnswerShape.NOT_A_FUNCTION),
+    ("def f(a, b):\n    return a\n", AnswerShape.WRONG_ARITY),
+    ("def f(x, *, scale=1):\n    return x\n", AnswerShape.WRITTEN),
+    ("f = lambda x: x\n", AnswerShape.WRITTEN)])
+def test_answer_hints_read_the_source(code, shape):
+    assert answer_hint(code, "f", CellKind.FUNCTION, [((1.0,), {})]).shape is shape
+
+
+def test_no_answer_is_the_students_status_with_advice():
+    for shape in (AnswerShape.UNTOUCHED, AnswerShape.EMPTY, AnswerShape.NONE):
+        status, message = unanswered_or_broken("f", CellKind.FUNCTION, AnswerHint(shape), True)
+        assert status is Status.UNANSWERED and "resubmit" in message
+    status, message = unanswered_or_broken("f", CellKind.FUNCTION,
+                                           AnswerHint(AnswerShape.NOT_A_FUNCTION, "a list"), True)
+    assert status is Status.FAILED and "a list" in message
+    assert unanswered_or_broken("f", CellKind.FUNCTION, AnswerHint(), True) is None
+
+
+def test_reference_imports_are_found_but_data_tables_are_allowed():
+    import ast
+
+    assert reference_import(ast.parse("from course_lib.shading import _shade")) \
+        == "course_lib.shading._shade"
+    assert reference_import(ast.parse("def g():\n    import course_lib.splines as s\n"))
+    assert not reference_import(ast.parse("from course_lib.marching_cubes import TRI_TABLE"))
+    assert not reference_import(ast.parse("import numpy as np"))
+
+
+def test_hidden_seed_follows_the_solution_not_its_comments():
+    a = solution_digest("def f(x):\n    return x  # one\n")
+    assert a == solution_digest("def f(x):\n\n    return x   # two\n")
+    assert a != solution_digest("def f(x):\n    return -x\n")
+    assert case_seed(b"s", "kim", "f", a) != case_seed(b"s", "kim", "f", solution_digest("x=1"))
+    assert case_seed(b"s", "kim", "f", a) == case_seed(b"s", "kim", "f", a)
+
+
+def test_result_cap_follows_the_expected_answer():
+    small, big = result_cap(1.0), result_cap(np.zeros(10_000))
+    assert big - small >= 4 * 80_000 and small >= 16 * 1024
