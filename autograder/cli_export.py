@@ -43,10 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _due(text: str | None) -> dt.datetime | None:
     if text is None:
         return None
-    when = dt.datetime.fromisoformat(text)
-    if when.tzinfo is not None:
-        when = when.astimezone(dt.timezone.utc).replace(tzinfo=None)
-    return when
+    return dt.datetime.fromisoformat(text)
 
 
 def main(args: argparse.Namespace) -> int:

@@ -96,10 +96,18 @@ def late_penalty(row: StudentGrades, total_max: float, late_per_day: float,
     if late_per_day < 0:
         raise ValueError(f"late_per_day must be >= 0, got {late_per_day}")
     deadline = row.due if due is None else due + (row.extension or dt.timedelta(0))
-    if row.timestamp is None or deadline is None or row.timestamp <= deadline:
+    handed_in, deadline = _naive_utc(row.timestamp), _naive_utc(deadline)
+    if handed_in is None or deadline is None or handed_in <= deadline:
         return 0.0
-    days = math.ceil((row.timestamp - deadline).total_seconds() / 86400.0)
+    days = math.ceil((handed_in - deadline).total_seconds() / 86400.0)
     return min(sum(row.scores.values()), days * late_per_day / 100.0 * total_max)
+
+
+def _naive_utc(when: dt.datetime | None) -> dt.datetime | None:
+    """``when`` as a naive UTC datetime (nbgrader stores naive UTC)."""
+    if when is None or when.tzinfo is None:
+        return when
+    return when.astimezone(dt.timezone.utc).replace(tzinfo=None)
 
 
 def write_all(rows: list[StudentGrades], maxima: dict[str, float], out: Path, *,

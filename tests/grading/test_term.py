@@ -14,6 +14,7 @@ compared with nbgrader's own ``SubmittedAssignment.score``.
 from __future__ import annotations
 
 import csv
+import datetime as dt
 import html
 import json
 import os
@@ -205,6 +206,24 @@ def _export(term, sources) -> None:
             for nb in sub.notebooks:
                 col = next(k for k in rows[student] if k.startswith(f"{nb.name} ("))
                 assert float(rows[student][col]) == pytest.approx(nb.score, abs=0.006)
+    _late_export(term, out, maximum)
     auto_max = sum(p for s in sources for *_, p in s.graded)
     alice_auto = sum(v[0] or 0.0 for k, v in _state(term).items() if k[0] == "alice")
     assert alice_auto == pytest.approx(auto_max, abs=1e-6), "the model code earns every mark"
+
+
+def _late_export(term, out: Path, maximum: float) -> None:
+    """Due 36 hours before alice handed in, 10 % a started day: two days, 20 % of the marks."""
+    with _gradebook(term) as gb:
+        subs = {s: (gb.find_submission(A, s).timestamp, gb.find_submission(A, s).score)
+                for s in STUDENTS}
+    due = subs["alice"][0] - dt.timedelta(hours=36)
+    _autograder("export", "--out", str(out), "--course", str(term["course"]), "--allow-unmarked",
+                "--due", due.isoformat(), "--late-per-day", "10")
+    with open(out / "moodle.csv", newline="", encoding="utf-8") as f:
+        rows = {r["ID number"]: r for r in csv.DictReader(f)}
+    for student, (stamp, score) in subs.items():
+        days = -(-(stamp - due).total_seconds() // 86400)
+        penalty = min(score, days * 0.10 * maximum)
+        assert float(rows[student]["Late penalty"]) == pytest.approx(penalty, abs=0.06)
+        assert float(rows[student]["tripos2006 total"]) == pytest.approx(score - penalty, abs=0.06)
