@@ -2,7 +2,8 @@
 
 release → two students fetch, answer and submit (nbgrader's own ``fetch_assignment`` and
 ``submit``, each with a ``HOME`` of their own) → ``nbgrader collect`` → ``python -m autograder
-grade`` → written answers marked (nbgrader's Gradebook API, as the Formgrader stores them) →
+grade`` → written answers marked (one in the Formgrader, in Chromium, the README's click path;
+the rest through nbgrader's Gradebook API, as the Formgrader stores them) →
 re-grade with ``--reveal-hidden`` (marks, comments and flags intact) → ``python -m autograder
 feedback`` → each student's ``nbgrader fetch_feedback`` → ``python -m autograder export``.
 
@@ -74,7 +75,11 @@ def _answers(student: str, src, fetched: Path) -> dict:
 
 @pytest.fixture(scope="module")
 def term(tmp_path_factory, sources):
-    base = tmp_path_factory.mktemp("term")
+    return build_term(tmp_path_factory.mktemp("term"), sources)
+
+
+def build_term(base: Path, sources) -> dict:
+    """Release, fetch, answer, submit, collect and grade, in the folder ``base``."""
     course = base / "course"
     exchange = course / "exchange"            # the course's own exchange (nbgrader_config.py)
     (base / "secret").write_bytes(SECRET + b"\n")
@@ -110,6 +115,16 @@ def _mark(term, student: str, nb: str, gid: str, score: float, comment: str) -> 
         grade.needs_manual_grade = False
         gb.find_comment(gid, nb, A, student).manual_comment = comment
         gb.db.commit()
+
+
+def _mark_in_the_formgrader(term, student, nb, gid, score, comment) -> str:
+    import formgrader_ui
+
+    if not formgrader_ui.CHROMIUM.exists():
+        pytest.skip("Debian's chromium is not installed (make test installs it when run as root)")
+    artifacts = REPO / "test-artifacts" / "browser"
+    artifacts.mkdir(parents=True, exist_ok=True)
+    return formgrader_ui.mark(term["course"], student, nb, gid, score, comment, artifacts)
 
 
 def _state(term) -> dict:
@@ -149,7 +164,15 @@ def test_whole_term(term, sources):
     src = sources[0]
     marks = {(src.name, gid): (round(points / 2, 1), f"comment {k} for {gid}")
              for k, (gid, points) in enumerate(src.manual)}
-    for (nb, gid), (score, comment) in marks.items():
+    (nb0, gid0), (score0, comment0) = next(iter(marks.items()))
+    text = _mark_in_the_formgrader(term, "alice", nb0, gid0, score0, comment0)
+    assert "For the marker of" in text and "Rubric" in text, "the rubric beside the answer"
+    with _gradebook(term) as gb:
+        grade = gb.find_grade(gid0, nb0, A, "alice")
+        assert grade.manual_score == pytest.approx(score0, abs=1e-9)
+        assert not grade.needs_manual_grade
+        assert gb.find_comment(gid0, nb0, A, "alice").comment == comment0
+    for (nb, gid), (score, comment) in list(marks.items())[1:]:
         _mark(term, "alice", nb, gid, score, comment)
     _mark(term, "bob", src.name, src.manual[0][0], 1.0, "Bob: say why the echo moves.")
     before = _state(term)
