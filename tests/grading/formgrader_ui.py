@@ -86,10 +86,13 @@ def mark(course: Path, student: str, notebook: str, grade_id: str, score: float,
             grader.get_by_role("link", name=re.compile(r"^Submission #1$")).wait_for()
             grader.get_by_text("Show All Names").click()
             grader.get_by_role("link", name=student).first.click()
-            grader.locator(f"#{grade_id}-comment").fill(comment)
-            grader.locator(f"input.score#{grade_id}").fill(f"{score:g}")
-            grader.locator(f"input.score#{grade_id}").press("Tab")
-            page.wait_for_timeout(2000)     # the Formgrader saves on change, asynchronously
+            # the Formgrader saves each field on change (when it loses focus): one at a time
+            for field, value, api in ((f"#{grade_id}-comment", comment, "/api/comment/"),
+                                      (f"input.score#{grade_id}", f"{score:g}", "/api/grade/")):
+                with page.expect_response(lambda r, api=api: api in r.url
+                                          and r.request.method == "PUT" and r.ok):
+                    grader.locator(field).fill(value)
+                    grader.locator(field).press("Tab")
             page.screenshot(path=str(artifacts / "formgrader-marking.png"))
             return grader.locator("body").inner_text()
         finally:
