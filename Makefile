@@ -8,8 +8,10 @@ STAMP  := $(VENV)/.installed
 # nbgrader shells out to `alembic`: the venv's bin/ must be on PATH for anything that runs it.
 export PATH := $(BIN):$(PATH)
 PORT   ?= 8888
+# make lab: the students' own environment (their wheel only, none of this repository's sources)
+STUDENT_VENV := .venv-student
 
-.PHONY: lab instructor test test-fast bench browser-deps sandbox-deps clean
+.PHONY: lab instructor test test-fast bench browser-deps sandbox-deps wheel-deps clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -17,9 +19,10 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	@touch $(STAMP)
 
-## lab: open the course in JupyterLab as a student (the released notebooks)
-lab: $(STAMP)
-	$(BIN)/python -m autograder lab --role student --port $(PORT)
+## lab: open the course in JupyterLab as a student: the released notebooks, run in
+## $(STUDENT_VENV) with the students' compiled wheel (rebuilt and reinstalled when sources change)
+lab: $(STAMP) wheel-deps
+	$(BIN)/python -m autograder lab --role student --student-env $(STUDENT_VENV) --port $(PORT)
 
 ## instructor: open JupyterLab on the nbgrader sources, with the formgrader
 instructor: $(STAMP)
@@ -43,8 +46,17 @@ sandbox-deps:
 	  else echo "warning: not root, cannot apt-get install bubblewrap; the grader cannot isolate students' code"; fi; \
 	fi
 
+## wheel-deps: a C compiler and the Python headers, to compile the students' wheel (Cython)
+wheel-deps:
+	@if ! command -v gcc >/dev/null 2>&1 || [ ! -f "$$($(BIN)/python -c 'import sysconfig; print(sysconfig.get_paths()["include"])')/Python.h" ]; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends gcc python3-dev >/dev/null 2>&1) \
+	      || echo "warning: could not install gcc/python3-dev; the student wheel cannot be built"; \
+	  else echo "warning: no gcc or Python headers (apt-get install gcc python3-dev); the student wheel cannot be built"; fi; \
+	fi
+
 ## test: the whole suite (library, notebooks, grading bank, browser)
-test: $(STAMP) browser-deps sandbox-deps
+test: $(STAMP) browser-deps sandbox-deps wheel-deps
 	$(BIN)/python -m pytest -n 2 --dist loadgroup -q
 
 ## bench: benchmarks against peers measured in the same run (writes benchmarks/results.md)
@@ -52,4 +64,4 @@ bench: $(STAMP)
 	$(BIN)/python -m benchmarks
 
 clean:
-	rm -rf $(VENV) .pytest_cache test-artifacts
+	rm -rf $(VENV) $(STUDENT_VENV) .pytest_cache test-artifacts

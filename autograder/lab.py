@@ -2,7 +2,12 @@
 
 ``--role student`` (``make lab``)
     releases the assignment through nbgrader (``course/release/tripos2006/``, solutions stubbed)
-    and opens JupyterLab on ``course/release/`` with the assignment folder open. The nbgrader
+    and opens JupyterLab on ``course/release/`` with the assignment folder open. With
+    ``--student-env DIR`` (``make lab`` passes ``.venv-student``) JupyterLab and the kernels run
+    in that environment of their own, holding the students' wheel and nothing of this
+    repository (:mod:`autograder.student_bundle`; built and installed when the sources change),
+    so the view is exactly what students get. Without it the instructors' environment serves
+    the release, a quick preview in which ``course_lib`` sources stay readable. The nbgrader
     "Create Assignment", "Formgrader" and "Course List" plugins are disabled for this launch (and
     the formgrader / course-list server extensions with them); the "Validate" button and the
     "Assignments" panel stay.
@@ -42,6 +47,14 @@ from .course import (
     nbgrader_env,
     prepare_course,
 )
+from .student_bundle import (
+    STUDENT_DISABLED_PLUGINS,
+    STUDENT_DISABLED_SERVER_EXTENSIONS,
+    build_wheel,
+    default_build_cache,
+    ensure_student_env,
+    student_env_vars,
+)
 
 #: JupyterLab 4 plugin ids of nbgrader 0.9 (``@jupyter/nbgrader`` since 0.9.3).
 NBGRADER_PLUGINS = (
@@ -51,16 +64,8 @@ NBGRADER_PLUGINS = (
     "@jupyter/nbgrader:assignment-list",
     "@jupyter/nbgrader:validate-assignment",
 )
-#: What a student must not have.
-STUDENT_DISABLED_PLUGINS = (
-    "@jupyter/nbgrader:formgrader",
-    "@jupyter/nbgrader:create-assignment",
-    "@jupyter/nbgrader:course-list",
-)
-STUDENT_DISABLED_SERVER_EXTENSIONS = (
-    "nbgrader.server_extensions.formgrader",
-    "nbgrader.server_extensions.course_list",
-)
+# What a student must not have (STUDENT_DISABLED_PLUGINS, STUDENT_DISABLED_SERVER_EXTENSIONS)
+# is defined beside the students' wheel, which switches the same things off where it is installed.
 ROLES = ("student", "instructor")
 #: JupyterLab's news/announcements plugin, off in both views.
 NEWS_PLUGIN = "@jupyterlab/apputils-extension:announcements"
@@ -106,11 +111,12 @@ def write_launch_config(config_dir: Path, role: str, course_root: Path) -> Path:
 
 
 def lab_command(
-    role: str, root_dir: Path, port: int, ip: str, token: str, open_browser: bool, default_url: str
+    role: str, root_dir: Path, port: int, ip: str, token: str, open_browser: bool, default_url: str,
+    python: str | Path | None = None,
 ) -> list[str]:
-    """The ``python -m jupyterlab ...`` command line of a launch."""
+    """The ``python -m jupyterlab ...`` command line of a launch (``python``: default this one)."""
     return [
-        sys.executable, "-m", "jupyterlab",
+        str(python or sys.executable), "-m", "jupyterlab",
         f"--ServerApp.root_dir={root_dir}",
         f"--ServerApp.ip={ip}",
         f"--ServerApp.port={port}",
@@ -133,10 +139,15 @@ def launch(
     config_dir: Path | None = None,
     stdout=None,
     stderr=None,
+    student_env: Path | None = None,
+    build_cache: Path | None = None,
 ) -> tuple[subprocess.Popen, str]:
     """Prepare the course, start JupyterLab for ``role`` and return ``(process, url)``.
 
     ``config_dir`` is the per-launch Jupyter config directory (the caller owns it).
+    ``student_env`` (student role only): run JupyterLab in that virtual environment, made or
+    refreshed with the students' wheel (compiled into ``build_cache``, default
+    ``<course_root>/.student-build``).
     """
     if role not in ROLES:
         raise ValueError(f"role must be one of {ROLES}, not {role!r}")
@@ -149,18 +160,36 @@ def launch(
         root_dir, default_url = course.root, "/lab"
     token = secrets.token_hex(24) if token is None else token
     write_launch_config(config_dir, role, course.root)
-    env = nbgrader_env()
+    python, env = launch_environment(role, course.root, student_env, build_cache)
     # the kernels must pick their backend as in any JupyterLab (inline, or the notebook's own
     # ``%matplotlib widget``): the Agg that ``make`` and the test runs export would hide figures
     env.pop("MPLBACKEND", None)
     env["JUPYTER_CONFIG_PATH"] = os.pathsep.join(
         [str(config_dir), *[p for p in env.get("JUPYTER_CONFIG_PATH", "").split(os.pathsep) if p]]
     )
-    cmd = lab_command(role, root_dir, port, ip, token, open_browser, default_url)
+    cmd = lab_command(role, root_dir, port, ip, token, open_browser, default_url, python)
     proc = subprocess.Popen(cmd, cwd=root_dir, env=env, stdout=stdout, stderr=stderr)
     host = "localhost" if ip in ("127.0.0.1", "localhost", "") else ip
     url = f"http://{host}:{port}{default_url}" + (f"?token={token}" if token else "")
     return proc, url
+
+
+def launch_environment(
+    role: str, course_root: Path, student_env: Path | None, build_cache: Path | None
+) -> tuple[Path | None, dict]:
+    """``(python, environment variables)`` of the JupyterLab a launch starts.
+
+    ``python`` is ``None`` for this interpreter (the instructors' environment).
+    """
+    if student_env is None:
+        return None, nbgrader_env()
+    if role != "student":
+        raise ValueError("student_env is for role 'student' only")
+    wheel = build_wheel(build_cache or default_build_cache(course_root))
+    python = ensure_student_env(Path(student_env), wheel)
+    env = student_env_vars(Path(student_env))
+    env.setdefault("PYTHONIOENCODING", "utf-8")
+    return python, env
 
 
 def _interrupt(signum, frame):
@@ -180,6 +209,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-browser", action="store_true", help="do not open a browser")
     parser.add_argument("--course-root", type=Path, default=DEFAULT_COURSE_ROOT,
                         help=f"nbgrader course root (default: {DEFAULT_COURSE_ROOT})")
+    parser.add_argument("--student-env", type=Path, default=None,
+                        help="student role: run JupyterLab in this virtual environment holding "
+                             "the students' wheel only (made or refreshed as needed; make lab "
+                             "passes .venv-student); default: this environment, a preview in "
+                             "which the course_lib sources are readable")
+    parser.add_argument("--build-cache", type=Path, default=None,
+                        help="folder keeping compiled student wheels "
+                             "(default: COURSE_ROOT/.student-build)")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -188,12 +225,16 @@ def main(args: argparse.Namespace) -> int:
             proc, url = launch(
                 args.role, args.course_root, port=args.port, ip=args.ip, token=args.token,
                 open_browser=not args.no_browser, config_dir=Path(tmp),
+                student_env=args.student_env, build_cache=args.build_cache,
             )
-        except (FileNotFoundError, RuntimeError) as exc:
+        except (FileNotFoundError, ValueError, RuntimeError, subprocess.CalledProcessError) as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 1
         view = ("student view: the released notebooks (solutions stubbed)" if args.role == "student"
                 else "instructor view: the nbgrader course root with the formgrader")
+        if args.role == "student" and args.student_env is None:
+            view += ("\n  (preview in the instructors' environment: course_lib sources are "
+                     "readable here; `make lab` opens the students' own environment)")
         print(f"\n4F9 {view}\n  {url}\n", flush=True)
         # one Ctrl-C (or a SIGTERM to this launcher) stops JupyterLab without its y/n prompt
         signal.signal(signal.SIGTERM, _interrupt)

@@ -6,9 +6,12 @@ gradebook then holds the assignment for grading). They are copied to ``--out/tri
 after a leak check: no solution or hidden-test delimiters, no import of the in-kernel checker
 (``autograder.incell``), no model answer of a manually graded cell, no outputs; and every
 solution and test code cell tagged ``raises-exception``, so that Run All on an untouched release
-runs past the stubs to every figure and explorer.
+runs past the stubs to every figure and explorer. With ``--out`` the command also writes what
+students install, ``--out/student/`` (a wheel of ``course_lib`` whose graded references are
+compiled, and a README: :mod:`autograder.student_bundle`).
 
-    python -m autograder release --out dist/            # -> dist/tripos2006/q1_imaging.ipynb ...
+    python -m autograder release --out dist/   # -> dist/tripos2006/q1_imaging.ipynb ...
+                                               #    dist/student/4f9_course_student-*.whl, README.md
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from pathlib import Path
 
 import nbformat
 
+from . import student_bundle
 from .course import (
     ASSIGNMENT,
     DEFAULT_COURSE_ROOT,
@@ -128,6 +132,13 @@ def release(out: Path | None = None, course_root: Path | None = None) -> list[Pa
     return written
 
 
+def release_for_students(out: Path, course_root: Path, build_cache: Path | None = None) -> list[Path]:
+    """:func:`release` to ``out/tripos2006/`` plus the students' wheel and README in ``out/student/``."""
+    written = release(out, course_root)
+    cache = build_cache if build_cache is not None else student_bundle.default_build_cache(course_root)
+    return written + student_bundle.write_bundle(out, cache)
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.description = "Write the student versions of the assignment through nbgrader."
     parser.add_argument(
@@ -139,6 +150,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="the nbgrader course root holding source/, release/ and the gradebook "
              f"(default: {DEFAULT_COURSE_ROOT})",
     )
+    parser.add_argument(
+        "--no-student-bundle", action="store_true",
+        help="with --out, write only the notebooks, not DIR/student/ (the wheel and its README)",
+    )
+    parser.add_argument(
+        "--build-cache", type=Path, default=None,
+        help="folder keeping compiled student wheels between runs "
+             "(default: COURSE_ROOT/.student-build)",
+    )
 
 
 def main(args: argparse.Namespace) -> int:
@@ -146,8 +166,11 @@ def main(args: argparse.Namespace) -> int:
         print("error: no notebooks/q*.ipynb to release", file=sys.stderr)
         return 1
     try:
-        written = release(args.out, args.course_root)
-    except ReleaseLeak as exc:
+        if args.out is not None and not args.no_student_bundle:
+            written = release_for_students(args.out, args.course_root, args.build_cache)
+        else:
+            written = release(args.out, args.course_root)
+    except (ReleaseLeak, student_bundle.WheelLeak) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except RuntimeError as exc:

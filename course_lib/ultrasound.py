@@ -16,7 +16,8 @@ between them, and a probe scans them from above. The scanner converts each echo'
 
 The three graded functions are :func:`displayed_thickness`, :func:`displayed_depths` and
 :func:`round_trip_attenuation_db`. :func:`simulate_bscan` renders a 2-D B-scan of the exam's
-phantom (:func:`exam_phantom`, with sizes of our choosing: the exam gives none) from interface reflections and speckle, and
+phantom (:func:`exam_phantom`, with sizes of our choosing: the exam gives none) from interface
+reflections and speckle, and
 :func:`phantom_interfaces` gives the true and displayed depth of every interface per image column.
 
 Equations

@@ -40,6 +40,10 @@ class Mismatch:
     def __str__(self) -> str:
         return self.text
 
+    def __contains__(self, words: str) -> bool:
+        """``"words" in mismatch`` reads its text, as for a rule that returns a ``str``."""
+        return words in self.text
+
 
 def wrong_shape(text: str) -> Mismatch:
     """A rule's answer for a value of the wrong shape, type or number of items."""

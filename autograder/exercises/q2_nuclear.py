@@ -14,7 +14,7 @@ import numpy as np
 
 from course_lib import gamma_camera
 
-from .base import Case, Exercise, close
+from .base import Case, Exercise, close, wrong_shape
 
 NB = "q2_nuclear"
 _REL = close(rtol=1e-9, atol=1e-12)
@@ -83,11 +83,11 @@ def _same_points(tol=1e-9):
 
     def rule(expected, received):
         if not isinstance(received, np.ndarray):
-            return f"wrong type (expected an (N, 2) array, got {type(received).__name__})"
+            return wrong_shape(f"wrong type (expected an (N, 2) array, got {type(received).__name__})")
         e = np.asarray(expected, dtype=float)
         r = np.asarray(received, dtype=float)
         if r.shape != e.shape:
-            return f"wrong shape (expected {e.shape}, got {r.shape})"
+            return wrong_shape(f"wrong shape (expected {e.shape}, got {r.shape})")
         if not np.all(np.isfinite(r)):
             return "wrong value (NaN or inf in the answer)"
         if e.size == 0:

@@ -26,7 +26,7 @@ import numpy as np
 from course_lib import marching_cubes as mc
 from course_lib import mesh
 
-from .base import Case, Exercise, close, describe
+from .base import Case, Exercise, close, describe, wrong_shape
 
 NB = "q3_marching_cubes"
 
@@ -49,7 +49,7 @@ def same_mesh(expected, received, atol: float = 1e-6, rtol: float = 1e-6) -> str
     the same surface area.
     """
     if not isinstance(received, tuple) or len(received) != 2:
-        return f"wrong type (expected a tuple (verts, faces), got {describe(received)})"
+        return wrong_shape(f"wrong type (expected a tuple (verts, faces), got {describe(received)})")
     ev, ef = expected
     rv, rf = received
     if not isinstance(rv, np.ndarray) or not isinstance(rf, np.ndarray):
@@ -69,13 +69,14 @@ def same_mesh(expected, received, atol: float = 1e-6, rtol: float = 1e-6) -> str
         if rf.dtype.kind == "f" and np.all(rf == np.round(rf)):
             rf = rf.astype(np.int64)
         else:
-            return f"faces must hold integer vertex indices, got dtype {rf.dtype}"
+            return wrong_shape(f"faces must hold integer vertex indices, got dtype {rf.dtype}")
     if rf.size and (rf.min() < 0 or rf.max() >= len(rv)):
         return "faces index vertices that do not exist"
     if len(rv) != len(ev):
-        return f"wrong number of vertices (expected {len(ev)}, one per crossed grid edge; got {len(rv)})"
+        return wrong_shape(f"wrong number of vertices (expected {len(ev)}, one per crossed grid "
+                           f"edge; got {len(rv)})")
     if len(rf) != len(ef):
-        return f"wrong number of triangles (expected {len(ef)}, got {len(rf)})"
+        return wrong_shape(f"wrong number of triangles (expected {len(ef)}, got {len(rf)})")
     if not np.all(np.isfinite(rv)):
         return "NaN or inf among the vertices"
     if len(ev) and not np.allclose(_sorted_rows(rv), _sorted_rows(ev), atol=atol, rtol=0):
@@ -102,11 +103,11 @@ def same_mesh(expected, received, atol: float = 1e-6, rtol: float = 1e-6) -> str
 def _as_edge_triangles(received) -> np.ndarray | str:
     """``received`` as an int64 ``(t, 3)`` array, or the reason it is not one."""
     if not isinstance(received, np.ndarray):
-        return f"wrong type (expected a NumPy array of shape (t, 3), got {describe(received)})"
+        return wrong_shape(f"wrong type (expected a NumPy array of shape (t, 3), got {describe(received)})")
     if received.size == 0:
         received = received.reshape(0, 3)
     if received.ndim != 2 or received.shape[1] != 3:
-        return f"wrong shape (expected (t, 3) edge numbers, got {received.shape})"
+        return wrong_shape(f"wrong shape (expected (t, 3) edge numbers, got {received.shape})")
     if received.dtype.kind not in "iu":
         if received.dtype.kind != "f" or not np.all(received == np.round(received)):
             return f"the triangles must hold integer edge numbers, got dtype {received.dtype}"
@@ -162,7 +163,7 @@ def same_joined_patch(expected, received) -> str | None:
 def same_bool(expected, received) -> str | None:
     """A Python bool (NumPy's ``np.bool_`` accepted) equal to the expected one."""
     if not isinstance(received, bool):
-        return f"wrong type (expected True or False, got {describe(received)})"
+        return wrong_shape(f"wrong type (expected True or False, got {describe(received)})")
     return None if received == expected else f"wrong answer (expected {expected})"
 
 

@@ -117,7 +117,7 @@ def _halfway_cases(rng):
 
 def _model_cases(rng):
     yield Case(args=(*_COEF, _L, _N, _V), visible=True,
-               label="exam Q5(b): (0.0931, 0.0931, 0.699) for Phong")
+               label="the exam's Q5(b) vectors and coefficients")
     yield Case(args=(*_COEF, _L / np.linalg.norm(_L), _N, _V), visible=True,
                label="exam Q5(b) with L already unit length")
     yield Case(args=(*_COEF, _N, _N, _N), visible=True,

@@ -20,7 +20,7 @@ import numpy as np
 
 from course_lib import clipping
 
-from .base import Case, Exercise, close, describe
+from .base import Case, Exercise, close, describe, wrong_shape
 
 #: The exam's triangles in homogeneous screen coordinates (see the module docstring).
 EXAM_A = np.array(clipping.EXAM_Q6["A"])
@@ -56,11 +56,11 @@ def same_polygon(expected, received, atol: float = 1e-7) -> str | None:
     has the opposite orientation and is wrong).
     """
     if not isinstance(received, np.ndarray) or received.dtype.kind not in "iuf":
-        return f"wrong type (expected an array of shape (m, 4), got {describe(received)})"
+        return wrong_shape(f"wrong type (expected an array of shape (m, 4), got {describe(received)})")
     e = np.asarray(expected, dtype=float)
     r = np.asarray(received, dtype=float)
     if r.ndim != 2 or r.shape[1] != 4:
-        return f"wrong shape (expected (m, 4), got {r.shape})"
+        return wrong_shape(f"wrong shape (expected (m, 4), got {r.shape})")
     if len(e) == 0 or len(r) == 0:
         if len(e) == len(r):
             return None
@@ -74,7 +74,7 @@ def same_polygon(expected, received, atol: float = 1e-7) -> str | None:
     E = _drop_repeats(_unit_rows(e), atol)
     R = _drop_repeats(_unit_rows(r), atol)
     if len(E) != len(R):
-        return f"wrong number of vertices (expected {len(E)}, got {len(R)})"
+        return wrong_shape(f"wrong number of vertices (expected {len(E)}, got {len(R)})")
     for shift in range(len(R)):
         if np.allclose(np.roll(R, -shift, axis=0), E, atol=atol, rtol=0):
             return None
@@ -93,21 +93,21 @@ def same_span(expected, received) -> str | None:
     if received is None:
         return "the line crosses the triangle: expected (x_left, x_right), got None"
     if not isinstance(received, tuple) or len(received) != 2:
-        return f"wrong type (expected a tuple (x_left, x_right), got {describe(received)})"
+        return wrong_shape(f"wrong type (expected a tuple (x_left, x_right), got {describe(received)})")
     return close(rtol=1e-7, atol=1e-9)(expected, received)
 
 
 def same_ints(expected, received) -> str | None:
     """Integer arrays equal exactly (same shape, same values)."""
     if not isinstance(received, np.ndarray):
-        return f"wrong type (expected an integer array, got {describe(received)})"
+        return wrong_shape(f"wrong type (expected an integer array, got {describe(received)})")
     if received.dtype.kind not in "iu":
         if received.dtype.kind == "f" and np.all(received == np.round(received)):
             pass
         else:
-            return f"wrong type (expected integers, got dtype {received.dtype})"
+            return wrong_shape(f"wrong type (expected integers, got dtype {received.dtype})")
     if received.shape != expected.shape:
-        return f"wrong shape (expected {expected.shape}, got {received.shape})"
+        return wrong_shape(f"wrong shape (expected {expected.shape}, got {received.shape})")
     if not np.array_equal(received, expected):
         return "wrong indices"
     return None
@@ -119,9 +119,9 @@ def same_bools(expected, received) -> str | None:
     if isinstance(received, bool):
         received = np.asarray(received)
     if not isinstance(received, np.ndarray) or received.dtype.kind != "b":
-        return f"wrong type (expected booleans, got {describe(received)})"
+        return wrong_shape(f"wrong type (expected booleans, got {describe(received)})")
     if received.shape != e.shape:
-        return f"wrong shape (expected {e.shape}, got {received.shape})"
+        return wrong_shape(f"wrong shape (expected {e.shape}, got {received.shape})")
     bad = np.flatnonzero(received.ravel() != e.ravel())
     if bad.size:
         return f"wrong answer for {bad.size} vertex(es) (first at flat index {bad[0]})"

@@ -26,6 +26,8 @@ from pathlib import Path
 from ..isolation import UNSAFE_WARNING, IsolationUnavailable, Limits, Mode, probe
 from ..outputs import csv as csv_output
 from ..outputs import feedback, gradebook, report
+from ..exercises import REGISTRY
+from ..outputs.similarity import reference_source
 from .batch import Options, grade_batch
 from .reading import MAX_NOTEBOOK_MB
 from .secret import read_secret
@@ -121,7 +123,8 @@ def _write_outputs(batch, sources, args) -> None:
     out: Path = args.out
     csv_output.write_csv(batch.results, out / "grades.csv")
     feedback.write_all(batch.results, out / "feedback", reveal_hidden=args.reveal_hidden)
-    report.write_report(batch.results, sources, out / "report.html")
+    report.write_report(batch.results, sources, out / "report.html",
+                        references=reference_sources(batch.results), jobs=args.jobs)
     if args.no_gradebook:
         return
     try:
@@ -131,3 +134,14 @@ def _write_outputs(batch, sources, args) -> None:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         print(f"warning: the gradebook could not be updated ({type(exc).__name__}: {first}); "
               "grades.csv, the feedback and the report are complete", file=sys.stderr)
+
+
+def reference_sources(results) -> dict[str, str]:
+    """``{graded name: its course_lib reference's source}`` for the report's pasted-code check."""
+    names = {r.name for r in results if r.name in REGISTRY}
+    out = {}
+    for name in sorted(names):
+        reference = REGISTRY[name].reference
+        if REGISTRY[name].kind == "function" and reference is not None:
+            out[name] = reference_source(reference)
+    return out

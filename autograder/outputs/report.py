@@ -9,10 +9,12 @@ never as grader failures.
 from __future__ import annotations
 
 from collections import Counter, defaultdict
+from collections.abc import Mapping
 from pathlib import Path
 
 from ..model import STATUS_MEANING, CellKind, CellResult, SourceNotebook, Status
 from .html import e, page
+from .similarity import find_similar, render_section
 
 _STYLE = """
 .grid{display:flex;flex-wrap:wrap;gap:1.2em}.card{border:1px solid #ddd;padding:.6em;
@@ -20,12 +22,27 @@ border-radius:.4em}
 """
 
 
-def write_report(results: list[CellResult], sources: list[SourceNotebook], path: Path) -> Path:
-    """Write the report of ``results`` to ``path``."""
+def write_report(results: list[CellResult], sources: list[SourceNotebook], path: Path,
+                 references: Mapping[str, str] | None = None, jobs: int = 1) -> Path:
+    """Write the report of ``results`` to ``path``.
+
+    ``references`` (``{graded name: course_lib reference source}``) lets the "Similar
+    solutions" section also flag cells that paste a reference; ``jobs`` processes fingerprint.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(render(results, sources), encoding="utf-8")
+    path.write_text(render(results, sources, references, jobs), encoding="utf-8")
     return path
+
+
+def similar_solutions_html(results: list[CellResult], references: Mapping[str, str] | None = None,
+                           jobs: int = 1) -> str:
+    """The "Similar solutions" section over every student's graded function cells."""
+    cells: dict[str, dict[str, str]] = defaultdict(dict)
+    for r in results:
+        if r.kind is CellKind.FUNCTION and r.code.strip():
+            cells[r.student][r.name] = r.code
+    return render_section(find_similar(cells, references or {}, jobs=max(1, jobs)))
 
 
 def notebook_totals(results: list[CellResult]) -> dict[str, dict[str, tuple[float, float]]]:
@@ -67,7 +84,8 @@ def ungradeable(results: list[CellResult]) -> list[tuple[str, str, str, str]]:
     return sorted(seen.values(), key=lambda t: (t[2] != Status.UNREADABLE.value, t[0], t[1]))
 
 
-def render(results: list[CellResult], sources: list[SourceNotebook]) -> str:
+def render(results: list[CellResult], sources: list[SourceNotebook],
+           references: Mapping[str, str] | None = None, jobs: int = 1) -> str:
     """The report page."""
     students = sorted({r.student for r in results})
     body = ["<h1>tripos2006: grading report</h1>",
@@ -75,7 +93,8 @@ def render(results: list[CellResult], sources: list[SourceNotebook]) -> str:
             f"{sum(r.kind is not CellKind.MANUAL for r in results)} automatically graded cells. "
             "Written answers are marked in formgrader and are not included here.</p>"]
     body += _distributions(results, sources) + _most_failed_html(results)
-    body += _grader_errors_html(results) + _ungradeable_html(results) + _statuses_html(results)
+    body += _grader_errors_html(results) + _ungradeable_html(results)
+    body += [similar_solutions_html(results, references, jobs)] + _statuses_html(results)
     return page("tripos2006: grading report", body, _STYLE)
 
 

@@ -101,3 +101,20 @@ def all_points(nb) -> dict[str, float]:
         for c in nb.cells
         if nbgrader_meta(c).get("grade")
     }
+
+
+def errors_beyond_stubs(found: list[CellError]) -> list[str]:
+    """The errors of an executed release notebook that a stub does not explain.
+
+    A stub raises ``NotImplementedError``; the one other consequence of a stub is the
+    ``NameError`` a multiple-choice test cell raises for the very answer variable whose solution
+    cell was stubbed (the variable never exists).
+    """
+    stubbed = {e.grade_id for e in found if e.ename == "NotImplementedError" and e.grade_id}
+    return [
+        str(e) for e in found
+        if e.ename != "NotImplementedError"
+        and not (e.ename == "NameError" and e.grade_id and e.grade_id.startswith("test_")
+                 and e.grade_id[5:] in stubbed
+                 and e.evalue == f"name '{e.grade_id[5:]}' is not defined")
+    ]

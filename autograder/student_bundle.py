@@ -1,0 +1,355 @@
+"""What a student installs: a wheel of ``course_lib`` with no readable reference, and a README.
+
+``python -m autograder release --out DIR`` calls :func:`write_bundle`, which writes
+``DIR/student/4f9_course_student-<version>-<tags>.whl`` and ``DIR/student/README.md``.
+
+The wheel holds the course library the release notebooks import (figures, explorers, tables)
+without any way to read a graded function's reference: every module of ``course_lib`` except
+the package ``__init__`` files and :data:`SHIPPED_AS_SOURCE` is compiled by Cython into an
+extension module (docstrings kept for ``?``, no ``.py``, ``.pyc``, ``.c`` or debug information
+in the wheel, so ``??`` and ``inspect.getsource`` find no source). The wheel holds no
+``autograder`` (keys, hidden cases, the grader) and no notebook. :func:`wheel_problems` checks
+every built wheel for exactly that before it is handed out.
+
+A compiled wheel fits one Python version and platform (its tags say which): build the release
+with the interpreter the students use (e.g. the course's JupyterHub image).
+
+Building takes a minute or two on two cores, so wheels are cached in a build folder, keyed on a
+digest of everything that goes into them (:func:`sources_digest`); the digest is also the
+wheel's local version label, so ``pip`` upgrades an environment whenever the sources change.
+:func:`ensure_student_env` makes (or refreshes) a virtual environment holding the wheel alone,
+which is what ``make lab`` opens (``.venv-student/``) and what the tests execute the release in.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.metadata
+import json
+import os
+import shutil
+import subprocess
+import sys
+import sysconfig
+import tempfile
+import zipfile
+from pathlib import Path
+
+from packaging.requirements import Requirement
+
+from .course import REPO_ROOT, _locked
+
+LIBRARY = "course_lib"
+LIBRARY_DIR = REPO_ROOT / LIBRARY
+DIST_NAME = "4f9-course-student"
+#: modules students may read: the multiple-choice *format* checker that visible test cells
+#: call (it holds no key: the grader alone does)
+SHIPPED_AS_SOURCE = ("course_lib.answers",)
+#: the instructors' requirements a student's environment needs (versions come from our own
+#: package metadata, so the two never disagree)
+STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "jupyterlab", "nbgrader")
+SETUP_SCRIPT = Path(__file__).with_name("student_setup.py")
+#: nbgrader's instructor tools: off in ``make lab``'s student view and, through the wheel's
+#: Jupyter config files (:func:`student_jupyter_config`), wherever the wheel is installed
+STUDENT_DISABLED_PLUGINS = (
+    "@jupyter/nbgrader:formgrader",
+    "@jupyter/nbgrader:create-assignment",
+    "@jupyter/nbgrader:course-list",
+)
+STUDENT_DISABLED_SERVER_EXTENSIONS = (
+    "nbgrader.server_extensions.formgrader",
+    "nbgrader.server_extensions.course_list",
+)
+#: where the wheel's Jupyter config files go, under the environment's ``etc/jupyter/``; the
+#: server file sorts after nbgrader's own ``nbgrader.json`` so that it wins
+JUPYTER_CONFIG_FILES = {
+    "labconfig/page_config.d/4f9-student.json": "page",
+    "jupyter_server_config.d/zz-4f9-student.json": "server",
+}
+#: wheel members that must never reach a student, by suffix
+FORBIDDEN_SUFFIXES = (".pyc", ".pyo", ".c", ".cpp", ".h", ".pyx", ".pxd", ".ipynb")
+BUILD_TIMEOUT = 1800
+
+
+class WheelLeak(RuntimeError):
+    """A built student wheel contains something a student must not see."""
+
+
+def library_files() -> list[Path]:
+    """Every Python file of ``course_lib`` (sorted, relative to the repository)."""
+    return sorted(p.relative_to(REPO_ROOT) for p in LIBRARY_DIR.rglob("*.py")
+                  if "__pycache__" not in p.parts)
+
+
+def module_name(path: Path) -> str:
+    """``course_lib/plots/clipping.py`` -> ``course_lib.plots.clipping``."""
+    return ".".join(Path(path).with_suffix("").parts)
+
+
+def compiled_modules() -> list[str]:
+    """Dotted names of the modules the wheel carries only as compiled extensions."""
+    return [module_name(p) for p in library_files()
+            if p.name != "__init__.py" and module_name(p) not in SHIPPED_AS_SOURCE]
+
+
+def library_packages() -> list[str]:
+    """``course_lib`` and its sub-packages."""
+    return sorted(module_name(p.parent) for p in library_files() if p.name == "__init__.py")
+
+
+def student_requirements() -> list[str]:
+    """Requirement strings of the students' wheel, taken from the instructors' package."""
+    try:
+        declared = importlib.metadata.requires("4f9-course") or []
+    except importlib.metadata.PackageNotFoundError as exc:
+        raise RuntimeError("the course package is not installed (run `make .venv/.installed`)") \
+            from exc
+    chosen = [Requirement(r) for r in declared]
+    chosen = [r for r in chosen if r.marker is None and r.name in STUDENT_REQUIREMENTS]
+    missing = set(STUDENT_REQUIREMENTS) - {r.name for r in chosen}
+    if missing:
+        raise RuntimeError(f"pyproject.toml no longer requires {sorted(missing)}")
+    return [str(r) for r in chosen]
+
+
+def course_version() -> str:
+    return importlib.metadata.version("4f9-course")
+
+
+def student_jupyter_config() -> dict[str, dict]:
+    """``{path under etc/jupyter: JSON}``: nbgrader's instructor tools off for a student."""
+    contents = {
+        "page": {"disabledExtensions": {p: True for p in STUDENT_DISABLED_PLUGINS}},
+        "server": {"ServerApp": {"jpserver_extensions": {
+            ext: False for ext in STUDENT_DISABLED_SERVER_EXTENSIONS}}},
+    }
+    return {path: contents[kind] for path, kind in JUPYTER_CONFIG_FILES.items()}
+
+
+def bundle_spec() -> dict:
+    """What ``setup.py`` builds: the packages, the modules to compile, and the Jupyter config
+    files as setuptools ``data_files`` (``[[target dir, [staged file]], ...]``)."""
+    data_files = [[str(Path("etc/jupyter", path).parent), [str(Path("jupyter", path))]]
+                  for path in JUPYTER_CONFIG_FILES]
+    return {"packages": library_packages(), "compiled": compiled_modules(),
+            "data_files": data_files}
+
+
+def sources_digest() -> str:
+    """A digest of everything that goes into the wheel: the library, the build script, the
+    metadata and README, the module lists, the interpreter that compiles it."""
+    h = hashlib.sha256()
+    for rel in library_files():
+        h.update(str(rel).encode() + b"\0" + (REPO_ROOT / rel).read_bytes() + b"\0")
+    h.update(SETUP_SCRIPT.read_bytes())
+    h.update(json.dumps([course_version(), bundle_spec(), student_jupyter_config(),
+                         pyproject_text("0"), student_readme(),
+                         sys.version, sysconfig.get_platform()]).encode())
+    return h.hexdigest()
+
+
+def wheel_version(digest: str) -> str:
+    """The course version with the sources' digest as local label, e.g. ``0.1.0+g1a2b3c4d5e6f``."""
+    return f"{course_version()}+g{digest[:12]}"
+
+
+def default_build_cache(course_root: Path) -> Path:
+    """Where compiled wheels are kept between releases of a course (one build per digest)."""
+    return Path(course_root) / ".student-build"
+
+
+def pyproject_text(version: str) -> str:
+    """The staging folder's ``pyproject.toml`` (static metadata; setup.py adds the modules)."""
+    deps = ", ".join(json.dumps(r) for r in student_requirements())
+    return (
+        '[build-system]\nrequires = ["setuptools>=68", "wheel", "cython>=3.0"]\n'
+        'build-backend = "setuptools.build_meta"\n\n'
+        f'[project]\nname = "{DIST_NAME}"\nversion = "{version}"\n'
+        'description = "4F9 Medical Imaging & 3D Computer Graphics: the course library for '
+        'students (figures, explorers, tables)"\n'
+        'readme = "README.md"\n'
+        f'requires-python = "=={sys.version_info.major}.{sys.version_info.minor}.*"\n'
+        f"dependencies = [{deps}]\n"
+    )
+
+
+def stage_sources(stage: Path, digest: str) -> Path:
+    """Fill ``stage`` with what ``pip wheel`` builds from: the library, setup, metadata."""
+    for rel in library_files():
+        (stage / rel).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(REPO_ROOT / rel, stage / rel)
+    shutil.copyfile(SETUP_SCRIPT, stage / "setup.py")
+    (stage / "bundle.json").write_text(json.dumps(bundle_spec(), indent=1))
+    for path, content in student_jupyter_config().items():
+        (stage / "jupyter" / path).parent.mkdir(parents=True, exist_ok=True)
+        (stage / "jupyter" / path).write_text(json.dumps(content, indent=1))
+    (stage / "pyproject.toml").write_text(pyproject_text(wheel_version(digest)))
+    (stage / "README.md").write_text(student_readme())
+    return stage
+
+
+def wheel_problems(wheel: Path) -> list[str]:
+    """Every member of ``wheel`` a student must not get (empty when the wheel is fit to give)."""
+    compiled = set(compiled_modules())
+    problems = []
+    with zipfile.ZipFile(wheel) as zf:
+        names = zf.namelist()
+    config_files = {f"data/etc/jupyter/{path}" for path in JUPYTER_CONFIG_FILES}
+    for name in names:
+        top, _, rest = name.partition("/")
+        allowed = (top == LIBRARY or top.endswith(".dist-info")
+                   or (top.endswith(".data") and rest in config_files))
+        if not allowed:
+            problems.append(f"{name}: not part of {LIBRARY}")
+        if name.endswith(".py") and module_name(Path(name)) in compiled:
+            problems.append(f"{name}: source of a compiled module")
+        if name.endswith(FORBIDDEN_SUFFIXES) or "__pycache__" in name:
+            problems.append(f"{name}: source, bytecode or notebook")
+    missing = [m for m in compiled
+               if not any(n.startswith(m.replace(".", "/") + ".") and n.endswith(".so")
+                          for n in names)]
+    problems += [f"{m}: no compiled extension in the wheel" for m in missing]
+    return problems
+
+
+def _run_build(stage: Path, out: Path) -> Path:
+    cmd = [sys.executable, "-m", "pip", "wheel", "--no-build-isolation", "--no-deps",
+           "--no-cache-dir", "--quiet", "--wheel-dir", str(out), str(stage)]
+    proc = subprocess.run(cmd, cwd=stage, capture_output=True, text=True, timeout=BUILD_TIMEOUT,
+                          check=False)
+    if proc.returncode != 0:
+        raise RuntimeError(f"building the student wheel failed:\n{proc.stdout[-3000:]}\n"
+                           f"{proc.stderr[-3000:]}")
+    wheels = sorted(out.glob("*.whl"))
+    if len(wheels) != 1:
+        raise RuntimeError(f"pip wheel wrote {[w.name for w in wheels]}, expected one wheel")
+    return wheels[0]
+
+
+def build_wheel(cache_dir: Path) -> Path:
+    """The student wheel of the current sources, built into ``cache_dir/<digest>/`` if missing.
+
+    Raises :class:`WheelLeak` when the built wheel holds anything :func:`wheel_problems` names.
+    """
+    digest = sources_digest()
+    target = Path(cache_dir).resolve() / digest[:16]
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with _locked(target.parent / ".build.lock"):
+        built = sorted(target.glob("*.whl"))
+        if len(built) == 1:
+            return built[0]
+        for old in target.parent.iterdir():  # one cached build at a time
+            if old.is_dir():
+                shutil.rmtree(old)
+        print(f"compiling the students' wheel into {target} (a minute or two) ...",
+              file=sys.stderr, flush=True)
+        with tempfile.TemporaryDirectory(prefix="4f9-student-wheel-") as tmp:
+            stage = stage_sources(Path(tmp) / "src", digest)
+            wheel = _run_build(stage, Path(tmp) / "dist")
+            problems = wheel_problems(wheel)
+            if problems:
+                raise WheelLeak("the student wheel would leak instructor material:\n  "
+                                + "\n  ".join(problems))
+            target.mkdir()
+            return Path(shutil.copy2(wheel, target / wheel.name))
+
+
+def write_bundle(out_dir: Path, cache_dir: Path) -> list[Path]:
+    """Write ``out_dir/student/`` (the wheel and a README for students); return the files."""
+    wheel = build_wheel(cache_dir)
+    dest = Path(out_dir) / "student"
+    dest.mkdir(parents=True, exist_ok=True)
+    for old in dest.glob("*.whl"):
+        old.unlink()
+    written = [Path(shutil.copy2(wheel, dest / wheel.name)), dest / "README.md"]
+    written[1].write_text(student_readme(wheel.name))
+    return written
+
+
+def env_python(env_dir: Path) -> Path:
+    """The interpreter of the virtual environment ``env_dir``."""
+    return Path(env_dir) / ("Scripts/python.exe" if os.name == "nt" else "bin/python")
+
+
+def ensure_student_env(env_dir: Path, wheel: Path, base_python: str | None = None) -> Path:
+    """A virtual environment at ``env_dir`` holding ``wheel`` and its requirements alone.
+
+    Created with ``base_python`` (default: the Python this one was created from, never with
+    this environment's packages) when missing; the wheel is (re)installed when the environment
+    holds another build. Returns the environment's interpreter.
+    """
+    env_dir = Path(env_dir).resolve()
+    env_dir.mkdir(parents=True, exist_ok=True)  # ``venv`` fills an existing folder
+    with _locked(env_dir / ".student-env.lock"):
+        python = env_python(env_dir)
+        if not python.exists():
+            base = base_python or getattr(sys, "_base_executable", sys.executable)
+            subprocess.run([base, "-m", "venv", str(env_dir)], check=True, timeout=300,
+                           capture_output=True)
+        stamp = env_dir / ".student-wheel"
+        if not stamp.exists() or stamp.read_text() != Path(wheel).name:
+            print(f"installing {Path(wheel).name} into {env_dir} ...", file=sys.stderr, flush=True)
+            proc = subprocess.run([str(python), "-m", "pip", "install", "--quiet",
+                                   "--disable-pip-version-check", str(wheel)],
+                                  capture_output=True, text=True, timeout=BUILD_TIMEOUT,
+                                  env=student_env_vars(env_dir), check=False)
+            if proc.returncode != 0:
+                raise RuntimeError(f"installing {Path(wheel).name} into {env_dir} failed:\n"
+                                   f"{proc.stdout[-2000:]}\n{proc.stderr[-3000:]}")
+            stamp.write_text(Path(wheel).name)
+    return python
+
+
+def student_env_vars(env_dir: Path, base: dict | None = None) -> dict:
+    """Environment variables for a process of the student environment ``env_dir``.
+
+    Its ``bin/`` first on ``PATH`` (Jupyter finds kernels and ``nbgrader`` there) and nothing
+    that would put the instructors' packages in reach (``PYTHONPATH``, another venv).
+    """
+    env = dict(os.environ if base is None else base)
+    for var in ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV", "PYTHONSTARTUP"):
+        env.pop(var, None)
+    bindir = str(env_python(env_dir).parent)
+    instructors = str(Path(sys.executable).parent)
+    parts = [p for p in env.get("PATH", "").split(os.pathsep) if p and p not in (bindir, instructors)]
+    env["PATH"] = os.pathsep.join([bindir, *parts])
+    env["VIRTUAL_ENV"] = str(Path(env_dir).resolve())
+    return env
+
+
+def student_readme(wheel_name: str = "4f9_course_student-*.whl") -> str:
+    """The students' README (``DIR/student/README.md`` and the wheel's long description)."""
+    return f"""# 4F9 Medical Imaging & 3D Computer Graphics: the 2006 paper
+
+This folder holds the course library the six question notebooks (`tripos2006/q1_imaging.ipynb`
+to `q6_clipping.ipynb`) import: the figures, the interactive explorers and the tables they
+give you. It also brings JupyterLab, ipywidgets, ipympl and nbgrader's Validate button.
+
+## Install (once)
+
+Use the Python version named in the wheel's file name (`cp311` is Python 3.11):
+
+```bash
+python3 -m venv ~/4f9-env
+~/4f9-env/bin/python -m pip install {wheel_name}
+```
+
+## Work
+
+```bash
+cd tripos2006          # the folder of notebooks you were given
+~/4f9-env/bin/jupyter lab
+```
+
+Open a notebook and run its first cell. Fill in every cell marked `YOUR CODE HERE` (remove the
+`raise NotImplementedError()`), run the test cell under it, and write your explanations where
+it says `YOUR ANSWER HERE`. The **Validate** button in the notebook toolbar runs every cell of
+the notebook, as the grader will, and tells you which tests still fail.
+
+- Each graded function must work on its own: the grader runs your notebook's first cell and
+  your answer cells, nothing else.
+- Do not call `course_lib` from a graded function: the library is there for the figures and
+  explorers, and an answer that calls it scores nothing. Its help (`?` after a name) describes
+  what each function does; its code is not part of the package.
+- Multiple-choice answers are strings of option letters, e.g. `"b"` or `"ac"`.
+"""

@@ -1,0 +1,86 @@
+"""The release's own guard on the students' wheel (``student_bundle.wheel_problems``), on forged
+wheels: it passes one that holds only what students may get and names every kind of leak in one
+that does not. Also: the wheel asks for the same versions as the instructors' ``pyproject.toml``.
+(The real build is tested in ``test_student_bundle.py``.)"""
+
+from __future__ import annotations
+
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from autograder import student_bundle
+
+REPO = Path(__file__).resolve().parents[2]
+SO = ".cpython-311-x86_64-linux-gnu.so"
+DIST_INFO = "4f9_course_student-0.1.0.dist-info"
+
+
+def _library_modules() -> list[str]:
+    """``course_lib`` module paths without ``.py``, read from the repository here."""
+    return sorted(p.relative_to(REPO).with_suffix("").as_posix()
+                  for p in (REPO / "course_lib").rglob("*.py") if "__pycache__" not in p.parts)
+
+
+def _forge(path: Path, members: list[str]) -> Path:
+    with zipfile.ZipFile(path, "w") as zf:
+        for name in members:
+            zf.writestr(name, b"x")
+    return path
+
+
+DATA = "4f9_course_student-0.1.0.data/data/etc/jupyter"
+
+
+def _fit_members() -> list[str]:
+    members = [f"{DIST_INFO}/METADATA", f"{DIST_INFO}/RECORD",
+               f"{DATA}/labconfig/page_config.d/4f9-student.json",
+               f"{DATA}/jupyter_server_config.d/zz-4f9-student.json"]
+    for module in _library_modules():
+        readable = module.endswith("__init__") or module == "course_lib/answers"
+        members.append(module + (".py" if readable else SO))
+    return members
+
+
+def test_guard_passes_a_wheel_with_compiled_modules_only(tmp_path):
+    assert student_bundle.wheel_problems(_forge(tmp_path / "fit.whl", _fit_members())) == []
+
+
+@pytest.mark.parametrize("extra, complaint", [
+    ("course_lib/clipping.py", "source of a compiled module"),
+    ("course_lib/widgets/clipping.py", "source of a compiled module"),
+    ("course_lib/__pycache__/clipping.cpython-311.pyc", "bytecode"),
+    ("course_lib/clipping.c", "source, bytecode"),
+    ("course_lib/clipping.pyx", "source, bytecode"),
+    ("autograder/exercises/q6_clipping.py", "not part of course_lib"),
+    ("notebooks/q6_clipping.ipynb", "not part of course_lib"),
+    ("course_lib/q6_clipping.ipynb", "notebook"),
+    (f"{DATA}/jupyter_server_config.d/keys.json", "not part of course_lib"),
+    ("4f9_course_student-0.1.0.data/scripts/clipping.py", "not part of course_lib"),
+])
+def test_guard_names_each_leak(tmp_path, extra, complaint):
+    problems = student_bundle.wheel_problems(_forge(tmp_path / "leak.whl", _fit_members() + [extra]))
+    assert any(extra in p and complaint in p for p in problems), problems
+
+
+def test_guard_names_a_module_left_uncompiled(tmp_path):
+    members = [m for m in _fit_members() if not m.startswith("course_lib/mesh.")]
+    problems = student_bundle.wheel_problems(_forge(tmp_path / "short.whl", members))
+    assert problems == ["course_lib.mesh: no compiled extension in the wheel"]
+
+
+@pytest.mark.skipif(sys.version_info < (3, 11), reason="tomllib")
+def test_wheel_requirements_match_pyproject():
+    import tomllib
+
+    declared = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["dependencies"]
+    wanted = {"numpy", "matplotlib", "ipywidgets", "ipympl", "jupyterlab", "nbgrader"}
+    from packaging.requirements import Requirement
+
+    expected = {Requirement(r).name: Requirement(r).specifier for r in declared
+                if Requirement(r).name in wanted}
+    got = {Requirement(r).name: Requirement(r).specifier
+           for r in student_bundle.student_requirements()}
+    assert got == expected and set(got) == wanted
