@@ -26,7 +26,7 @@ import numpy as np
 from course_lib import marching_cubes as mc
 from course_lib import mesh
 
-from .base import Case, Exercise, close, describe, wrong_shape
+from .base import Case, Exercise, Mismatch, close, describe, wrong_shape
 
 NB = "q3_marching_cubes"
 
@@ -137,7 +137,7 @@ def same_joined_patch(expected, received) -> str | None:
     """
     index = _case_of_answer()[np.asarray(expected, dtype=np.int64).tobytes()]
     tris = _as_edge_triangles(received)
-    if isinstance(tris, str):
+    if isinstance(tris, (str, Mismatch)):
         return tris
     if len(tris) != len(expected):
         return (f"wrong number of triangles (expected {len(expected)}: n - 2 for each loop of "

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from ..model import STATUS_MEANING, CellKind, CellResult, SourceNotebook, Status
 from .html import e, page
-from .similarity import find_similar, render_section
+from .similarity import find_pasted_references, find_similar, render_section
 
 _STYLE = """
 .grid{display:flex;flex-wrap:wrap;gap:1.2em}.card{border:1px solid #ddd;padding:.6em;
@@ -39,10 +39,19 @@ def similar_solutions_html(results: list[CellResult], references: Mapping[str, s
                            jobs: int = 1) -> str:
     """The "Similar solutions" section over every student's graded function cells."""
     cells: dict[str, dict[str, str]] = defaultdict(dict)
+    everywhere: dict[str, dict[str, str]] = defaultdict(dict)   # every graded cell, any kind
     for r in results:
-        if r.kind is CellKind.FUNCTION and r.code.strip():
-            cells[r.student][r.name] = r.code
-    return render_section(find_similar(cells, references or {}, jobs=max(1, jobs)))
+        if r.kind is not CellKind.MANUAL and r.code.strip():
+            everywhere[r.student][(r.notebook, r.name)] = r.code
+            if r.kind is CellKind.FUNCTION:
+                cells[r.student][r.name] = r.code
+    jobs = max(1, jobs)
+    found = find_similar(cells, references or {}, jobs=jobs)
+    seen = {(m.left, m.name) for m in found if m.is_reference}
+    code = {s: "\n\n".join(c for _, c in sorted(per.items())) for s, per in everywhere.items()}
+    found += [m for m in find_pasted_references(code, references or {}, jobs=jobs)
+              if (m.left, m.name) not in seen]
+    return render_section(found)
 
 
 def notebook_totals(results: list[CellResult]) -> dict[str, dict[str, tuple[float, float]]]:

@@ -404,6 +404,33 @@ def find_similar(cells: Mapping[str, Mapping[str, str]], references: Mapping[str
                                  min_tokens=min_tokens)
 
 
+def find_pasted_references(code: Mapping[str, str], references: Mapping[str, str], *,
+                           threshold: float = THRESHOLD, min_tokens: int = MIN_TOKENS,
+                           k: int = K_GRAM, window: int = WINDOW, jobs: int = 1) -> list[Match]:
+    """Students whose solution code *anywhere* holds a reference (issue 11.3, red-team case).
+
+    :func:`find_similar` compares each graded name's own cell with its reference; a reference
+    pasted into another cell (behind a helper the graded cell calls) escapes it. Here ``code`` is
+    ``{student: all of that student's solution code}`` and every reference is looked for in all
+    of it, by containment (the share of the reference's fingerprints found), so the code around
+    the paste does not hide it.
+    """
+    if not isinstance(code, Mapping) or not isinstance(references, Mapping):
+        raise ValueError("code and references must be mappings")
+    _check_positive_int(min_tokens=min_tokens, k=k, window=window, jobs=jobs)
+    code = {s: src for s, src in code.items() if isinstance(src, str) and src.strip()}
+    references = {n: r for n, r in references.items() if isinstance(r, str)}
+    prints = fingerprint_all(set(code.values()) | set(references.values()), k, window, jobs)
+    kept = {s: prints[src] for s, src in sorted(code.items()) if prints[src] is not None}
+    found: list[Match] = []
+    for name, ref_source in sorted(references.items()):
+        ref = prints.get(ref_source)
+        if ref is not None and ref.tokens >= min_tokens:
+            found += _reference_matches(name, kept, code, ref_source, ref, threshold)
+    found.sort(key=lambda m: (-m.score, m.name, m.left))
+    return found
+
+
 def compare_fingerprinted(cells: Mapping[str, Mapping[str, str]],
                           prints: Mapping[str, Fingerprint | None],
                           references: Mapping[str, str], *, threshold: float = THRESHOLD,

@@ -96,13 +96,21 @@ def test_student_run_all_on_untouched_notebook_renders_explorers(page, student_l
     page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
     time.sleep(1.0)
     _wait_idle(page, 300)
+    # the explorer (the last code cell) rendered: an ipympl canvas that is not blank
+    out = page.locator(".jp-OutputArea-output").filter(has=page.locator(".jupyter-matplotlib")).first
+    out.wait_for(timeout=120_000)
+    _wait_idle(page, 120)
     page.screenshot(path=str(artifacts / "student-run-all.png"))
+    canvas = out.locator(".jupyter-matplotlib-canvas-div").first
+    pixels = canvas_pixels(canvas)
+    out.screenshot(path=str(artifacts / "student-run-all-explorer.png"))
+    assert pixels.size and float(pixels.std()) > 5.0, "the explorer's canvas is blank"
     # JupyterLab renders only the cells near the view, so read what Run All did from the saved
-    # notebook: the untouched stubs failed visibly ...
-    page.keyboard.press("Control+s")
+    # notebook (saved again until the last cell's run is in it): the stubs failed visibly ...
     cells = []
-    for _ in range(40):
-        time.sleep(0.5)
+    for _ in range(30):
+        page.keyboard.press("Control+s")
+        time.sleep(1.0)
         resp = page.request.get(f"{base}/api/contents/tripos2006/q5_phong.ipynb?{query}")
         cells = [c for c in resp.json()["content"]["cells"] if c["cell_type"] == "code"]
         if cells and cells[-1].get("execution_count"):
@@ -112,12 +120,5 @@ def test_student_run_all_on_untouched_notebook_renders_explorers(page, student_l
         "Run All showed no stub error: did it run the solution cells at all?"
     # ... and Run All went on past them to the last code cell
     assert cells[-1].get("execution_count"), "the last code cell did not run"
-    # the explorer rendered: an ipympl canvas that is not blank
-    out = page.locator(".jp-OutputArea-output").filter(has=page.locator(".jupyter-matplotlib")).first
-    out.wait_for(timeout=60_000)
-    canvas = out.locator(".jupyter-matplotlib-canvas-div").first
-    pixels = canvas_pixels(canvas)
-    out.screenshot(path=str(artifacts / "student-run-all-explorer.png"))
-    assert pixels.size and float(pixels.std()) > 5.0, "the explorer's canvas is blank"
     # and the static figures above it are images
     assert page.locator(".jp-OutputArea-output img").count() >= 1, "no static figure rendered"

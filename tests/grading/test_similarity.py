@@ -424,3 +424,31 @@ def test_the_grading_report_carries_the_section(tmp_path):
     section = page.split("Similar solutions", 1)[1]
     assert "alice" in section and "bob" in section and "dave" in section
     assert "carol" not in section
+
+
+def test_a_reference_pasted_into_another_cell_is_flagged(tmp_path):
+    """Red team: the graded cell stays the released stub and calls a helper; the reference is
+    pasted into a multiple-choice cell of the same notebook. The report still finds it."""
+    from autograder.model import CellKind, CellResult, Status
+    from autograder.outputs import report
+
+    ref = sim.reference_source(REGISTRY["ring_hole_positions"].reference)
+    stub = "def ring_hole_positions(pitch, n_rings):\n    return _helper(pitch, n_rings)\n"
+    elsewhere = "q2b_energy_window = 'b'\n\n" + disguise(ref, 7).replace(
+        "def ring_hole_positions", "def _helper")
+
+    def row(student, name, code, kind=CellKind.FUNCTION):
+        return CellResult(student, "q2_nuclear", f"test_{name}", name, 1.0, 1.0, Status.OK, "",
+                          kind=kind, code=code)
+
+    results = [row("erin", "ring_hole_positions", stub),
+               row("erin", "q2b_energy_window", elsewhere, CellKind.CHOICE),
+               row("frank", "ring_hole_positions", HAND_WRITTEN)]
+    found = sim.find_pasted_references({"erin": stub + "\n" + elsewhere, "frank": HAND_WRITTEN},
+                                       {"ring_hole_positions": ref})
+    assert [(m.left, m.name) for m in found] == [("erin", "ring_hole_positions")]
+    assert found[0].is_reference and found[0].score >= sim.THRESHOLD
+    page = report.write_report(results, [], tmp_path / "r.html",
+                               references={"ring_hole_positions": ref}).read_text()
+    section = page.split("Similar solutions", 1)[1]
+    assert "erin" in section and "frank" not in section
