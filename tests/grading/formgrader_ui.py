@@ -86,6 +86,10 @@ def mark(course: Path, student: str, notebook: str, grade_id: str, score: float,
             grader.get_by_role("link", name=re.compile(r"^Submission #1$")).wait_for()
             grader.get_by_text("Show All Names").click()
             grader.get_by_role("link", name=student).first.click()
+            grader.locator("textarea.comment").first.wait_for()
+            submission = next(f for f in page.frames if "/formgrader/submissions/" in f.url)
+            submission.wait_for_function("() => window.formgrader && formgrader.grades.loaded "
+                                         "&& formgrader.comments.loaded")
             # the Formgrader saves each field on change (when it loses focus): one at a time
             for field, value, api in ((f"#{grade_id}-comment", comment, "/api/comment/"),
                                       (f"input.score#{grade_id}", f"{score:g}", "/api/grade/")):
