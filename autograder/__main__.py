@@ -4,6 +4,8 @@ Each command lives in its own module with a ``add_arguments(parser)`` and a ``ma
 
 - ``release``  student versions through ``nbgrader generate_assignment`` (autograder/release.py)
 - ``grade``    sandboxed batch grading, CSV, feedback, report, gradebook (autograder/grade/)
+- ``feedback`` the hand-back through nbgrader's exchange (autograder/cli_feedback.py)
+- ``export``   Canvas, Moodle and long-format grades (autograder/cli_export.py)
 - ``lab``      JupyterLab on the student or the instructor view (autograder/lab.py)
 """
 
@@ -16,6 +18,9 @@ import sys
 COMMANDS = {
     "release": ("autograder.release", "write the student versions of the assignment"),
     "grade": ("autograder.grade.cli", "grade a folder of submissions outside the students' kernels"),
+    "feedback": ("autograder.cli_feedback", "hand back marks, comments and test results "
+                 "through nbgrader's exchange"),
+    "export": ("autograder.cli_export", "final grades for Canvas, Moodle and the archive"),
     "lab": ("autograder.lab", "open JupyterLab on the course (student or instructor view)"),
 }
 

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .. import judging
+from ..course import TEXT_STUB
 from ..exercises import REGISTRY
 from ..isolation import CaseInput, Limits, Mode, NameJob, NotebookJob, run_notebook
 from ..model import (ASSIGNMENT, AnswerHint, Batch, CaseRecord, CellKind, CellResult, NameRun,
@@ -148,16 +149,27 @@ def _kind(name: str) -> CellKind:
 
 
 def _manual_rows(student: str, src: SourceNotebook, sub: Submission) -> list[CellResult]:
+    """The written answers: 0 when missing or left as released (as nbgrader scores an
+    unchanged answer cell), otherwise waiting for a marker (score None)."""
     rows = []
     for gid, points in src.manual:
         answer = [c["source"] for c in sub.cells if c["grade_id"] == gid]
+        if not answer:
+            status, message = Status.MISSING, f"the answer cell {gid} is missing from the notebook"
+        elif written_answer_blank(answer[-1]):
+            status, message = Status.UNANSWERED, ("left as released (YOUR ANSWER HERE): 0 marks, "
+                                                  "nothing for a marker to read")
+        else:
+            status, message = Status.MANUAL, "marked by hand in formgrader"
         rows.append(CellResult(
-            student, src.name, gid, gid, None if answer else 0.0, points,
-            Status.MANUAL if answer else Status.MISSING,
-            "marked by hand in formgrader" if answer else
-            f"the answer cell {gid} is missing from the notebook", kind=CellKind.MANUAL,
-            code=answer[-1] if answer else ""))
+            student, src.name, gid, gid, None if status is Status.MANUAL else 0.0, points,
+            status, message, kind=CellKind.MANUAL, code=answer[-1] if answer else ""))
     return rows
+
+
+def written_answer_blank(source: str) -> bool:
+    """Whether a written answer is empty or still the release's ``YOUR ANSWER HERE`` stub."""
+    return source.strip() in ("", TEXT_STUB)
 
 
 def _run_all(works: list[NotebookWork], opts: Options) -> list[CellResult]:

@@ -37,6 +37,11 @@ from ..course import default_db_url
 from ..model import ASSIGNMENT, Batch, CellKind, CellResult, SourceNotebook, Status, Submission
 
 COURSE_ID = "4f9"
+#: Files of a submission folder the autograded folder keeps: nbgrader's ``release_feedback``
+#: needs both (``timestamp.txt`` names the submission, ``submission_secret.txt`` its exchange key).
+#: Metadata key of the marker's rubric cells in the autograded notebooks.
+RUBRIC_KEY = "autograder_rubric"
+CARRIED_FILES = ("timestamp.txt", "submission_secret.txt")
 _HIDDEN = re.compile(r"^[ \t]*###\s*BEGIN HIDDEN TESTS.*?^[ \t]*###\s*END HIDDEN TESTS[^\n]*\n?",
                      re.S | re.M)
 HIDDEN_NOTE = ("# hidden tests: run outside the notebook by `python -m autograder grade` "
@@ -146,13 +151,7 @@ def sync(batch: Batch, sources: list[SourceNotebook], submitted: Path, out: Path
                 grade = grades.get((r.notebook, r.grade_id))
                 if grade is None:
                     continue
-                if r.kind is CellKind.MANUAL:
-                    grade.auto_score = None if r.status is Status.MANUAL else 0.0
-                    grade.needs_manual_grade = (r.status is Status.MANUAL
-                                                or grade.manual_score is not None)
-                else:
-                    grade.auto_score = float(r.score or 0.0)
-                    grade.needs_manual_grade = grade.manual_score is not None
+                set_automatic_score(grade, r)
         gb.db.commit()
     for student in batch.students:
         _write_autograded(batch, sources, student, by_student.get(student, []),
@@ -165,9 +164,10 @@ def _write_autograded(batch: Batch, sources: list[SourceNotebook], student: str,
     """One student's autograded notebooks; a notebook that cannot be written is reported on
     stderr and never stops the others (nor the other students')."""
     folder.mkdir(parents=True, exist_ok=True)
-    ts = submitted / student / ASSIGNMENT / "timestamp.txt"
-    if ts.is_file() and not ts.is_symlink():
-        shutil.copyfile(ts, folder / "timestamp.txt")
+    for name in CARRIED_FILES:
+        kept = submitted / student / ASSIGNMENT / name
+        if kept.is_file() and not kept.is_symlink():
+            shutil.copyfile(kept, folder / name)
     results: dict[str, dict[str, CellResult]] = {}
     for r in rows:
         results.setdefault(r.notebook, {})[r.grade_id] = r
@@ -185,6 +185,22 @@ def _write_autograded(batch: Batch, sources: list[SourceNotebook], student: str,
             traceback.print_exc()
             print(f"error: the autograded notebook {student}/{src.name} could not be written",
                   file=sys.stderr)
+
+
+def set_automatic_score(grade, r: CellResult) -> None:
+    """Set what the grader decides of one nbgrader ``Grade`` and nothing a marker decided.
+
+    Only ``auto_score`` changes. ``manual_score``, comments and extra credit are never touched,
+    and a cell is flagged "needs manual grade" only when it is a written answer that nobody has
+    marked yet: an answer a marker scored stays marked through any number of re-grades, and a
+    blank or missing answer scores 0 with no marker (as nbgrader scores an unchanged answer).
+    """
+    if r.kind is CellKind.MANUAL:
+        grade.auto_score = None if r.status is Status.MANUAL else 0.0
+        grade.needs_manual_grade = r.status is Status.MANUAL and grade.manual_score is None
+    else:
+        grade.auto_score = float(r.score or 0.0)
+        grade.needs_manual_grade = False
 
 
 def _timestamp(folder: Path):
@@ -252,6 +268,7 @@ def autograded_notebook(src: SourceNotebook, sub: Submission,
             cells.append(c)
     else:
         cells = _merge(src, sub)
+    cells = with_rubrics(cells, src)
     seen_ids: set[str] = set()
     for k, c in enumerate(cells):
         gid = (c.get("metadata", {}).get("nbgrader") or {}).get("grade_id")
@@ -265,6 +282,33 @@ def autograded_notebook(src: SourceNotebook, sub: Submission,
         c["id"] = cid
     return {"cells": cells, "metadata": copy.deepcopy(src.nb.get("metadata", {})),
             "nbformat": 4, "nbformat_minor": 5}
+
+
+def rubric_cell(src: SourceNotebook, grade_id: str) -> dict:
+    """A markdown cell with the model answer and rubric of a written answer, for the marker.
+
+    It carries no nbgrader metadata (nothing to grade) and is tagged ``RUBRIC_KEY`` in its
+    metadata so that the hand-back (:mod:`.handback`) can drop it: students never see it.
+    """
+    scell = src.cell(grade_id)
+    text = scell.source if scell is not None else ""
+    return {"cell_type": "markdown", "metadata": {RUBRIC_KEY: {"for": grade_id}},
+            "source": (f"**For the marker of `{grade_id}` (never handed back): model answer "
+                       f"and rubric, from the source notebook**\n\n{text}")}
+
+
+def with_rubrics(cells: list[dict], src: SourceNotebook) -> list[dict]:
+    """``cells`` with a :func:`rubric_cell` right after each written answer cell."""
+    manual = {gid for gid, _ in src.manual}
+    out = []
+    for cell in cells:
+        if (cell.get("metadata") or {}).get(RUBRIC_KEY):
+            continue
+        out.append(cell)
+        gid = ((cell.get("metadata") or {}).get("nbgrader") or {}).get("grade_id")
+        if gid in manual:
+            out.append(rubric_cell(src, gid))
+    return out
 
 
 def _merge(src: SourceNotebook, sub: Submission) -> list[dict]:

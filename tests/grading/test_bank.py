@@ -415,7 +415,8 @@ def _no_answer(which, source, status, words=None):
 
 def _release_expect(src, ctx):
     exp = {tid: (0.0, "unanswered") for _, tid, _ in src.graded}
-    exp.update({gid: (None, "manual") for gid, _ in src.manual})
+    # written answers left as "YOUR ANSWER HERE" score 0 with no marker, as in nbgrader
+    exp.update({gid: (0.0, "unanswered") for gid, _ in src.manual})
     return exp
 
 

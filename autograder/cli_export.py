@@ -1,0 +1,80 @@
+"""``python -m autograder export``: final grades for Canvas, Moodle and the archive.
+
+    python -m autograder export --out DIR [--course ROOT] [--db-url URL] [--decimals N]
+                                [--due ISO] [--late-per-day PERCENT] [--allow-unmarked]
+
+Writes ``DIR/canvas.csv``, ``DIR/moodle.csv`` and ``DIR/grades-long.csv`` from nbgrader's
+gradebook (see :mod:`autograder.outputs.export`). Refuses (exit status 1, listing them) while
+written answers are unmarked, unless ``--allow-unmarked``. Exit status 2 for a usage error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import sys
+from pathlib import Path
+
+from .course import DEFAULT_COURSE_ROOT, default_db_url
+from .grade.sources import default_sources, load_source
+from .outputs import export
+
+#: Unmarked answers listed by name before "and N more".
+LISTED = 20
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``export``."""
+    add = parser.add_argument
+    add("--out", type=Path, required=True, help="folder for canvas.csv, moodle.csv and "
+        "grades-long.csv")
+    add("--course", type=Path, default=DEFAULT_COURSE_ROOT,
+        help="the nbgrader course root (default: course/ in the repository)")
+    add("--db-url", default=None, help="the gradebook (default sqlite:///<course>/gradebook.db)")
+    add("--decimals", type=int, default=1, help="decimal places of every mark (default 1)")
+    add("--due", default=None, help="due date, ISO 8601 in UTC (e.g. 2026-12-04T17:00); "
+        "default: the assignment's due date in the gradebook, if any")
+    add("--late-per-day", type=float, default=0.0, help="late penalty, percent of the "
+        "assignment's marks per started day after the due date (default 0)")
+    add("--allow-unmarked", action="store_true",
+        help="export even while written answers are unmarked (they count 0)")
+
+
+def _due(text: str | None) -> dt.datetime | None:
+    if text is None:
+        return None
+    return dt.datetime.fromisoformat(text)
+
+
+def main(args: argparse.Namespace) -> int:
+    """Export the grades; the exit status (see the module docstring)."""
+    root = Path(args.course).resolve()
+    if not (root / "gradebook.db").is_file() and args.db_url is None:
+        print(f"error: no gradebook in {root}", file=sys.stderr)
+        return 2
+    try:
+        due = _due(args.due)
+    except ValueError:
+        print(f"error: --due must be an ISO 8601 date, got {args.due!r}", file=sys.stderr)
+        return 2
+    maxima = {s.name: sum(p for *_, p in s.graded) + sum(p for _, p in s.manual)
+              for s in map(load_source, default_sources())}
+    rows = export.read_gradebook(args.db_url or default_db_url(root), list(maxima))
+    waiting = export.unmarked(rows)
+    if waiting:
+        shown = ", ".join(waiting[:LISTED]) + (f" and {len(waiting) - LISTED} more"
+                                               if len(waiting) > LISTED else "")
+        print(f"{'warning' if args.allow_unmarked else 'error'}: {len(waiting)} written "
+              f"answers are not marked yet: {shown}", file=sys.stderr)
+        if not args.allow_unmarked:
+            print("mark them in the Formgrader, or pass --allow-unmarked to count them as 0",
+                  file=sys.stderr)
+            return 1
+    try:
+        paths = export.write_all(rows, maxima, args.out, decimals=args.decimals,
+                                 late_per_day=args.late_per_day, due=due)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print("exported: " + ", ".join(str(p) for p in paths), file=sys.stderr)
+    return 0

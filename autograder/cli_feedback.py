@@ -1,0 +1,55 @@
+"""``python -m autograder feedback``: hand back marks, comments and test results.
+
+    python -m autograder feedback --grading OUT [--course ROOT] [--db-url URL] [--no-release]
+
+Run after ``grade`` (``OUT`` is its ``--out``) and after marking. Writes one page per student
+and notebook into ``ROOT/feedback/<student>/tripos2006/`` (only the pages whose content
+changed) and releases them through nbgrader's exchange (``nbgrader release_feedback``), from
+which students fetch them (``nbgrader fetch_feedback`` or the Assignments panel). See
+:mod:`autograder.outputs.handback`. Exit status 0 on success, 2 for a usage error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .course import DEFAULT_COURSE_ROOT, default_db_url
+from .outputs import handback
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``feedback``."""
+    add = parser.add_argument
+    add("--grading", type=Path, required=True,
+        help="the --out folder of `python -m autograder grade` (its feedback/ pages)")
+    add("--course", type=Path, default=DEFAULT_COURSE_ROOT,
+        help="the nbgrader course root (default: course/ in the repository)")
+    add("--db-url", default=None, help="the gradebook (default sqlite:///<course>/gradebook.db)")
+    add("--no-release", action="store_true",
+        help="write the pages only; do not run nbgrader release_feedback")
+
+
+def main(args: argparse.Namespace) -> int:
+    """Write the hand-back pages and release them; the exit status."""
+    root = Path(args.course).resolve()
+    if not (root / "autograded").is_dir() or not Path(args.grading).is_dir():
+        print(f"error: run `python -m autograder grade` first: no {root / 'autograded'} or "
+              f"no {args.grading}", file=sys.stderr)
+        return 2
+    db_url = args.db_url or default_db_url(root)
+    marks = handback.read_marks(db_url)
+    written, unchanged = handback.write_pages(marks, Path(args.grading), root)
+    print(f"feedback: {written} pages written, {unchanged} unchanged, in {root / 'feedback'}",
+          file=sys.stderr)
+    if args.no_release:
+        return 0
+    lacking = handback.missing_secrets(root)
+    if lacking:
+        print("warning: not released (no timestamp.txt or submission_secret.txt, i.e. not "
+              f"collected through nbgrader's exchange): {', '.join(lacking)}", file=sys.stderr)
+    handback.release(root, db_url, exclude=lacking)
+    print("feedback released to the exchange: students run `nbgrader fetch_feedback "
+          "tripos2006` or use the Assignments panel", file=sys.stderr)
+    return 0

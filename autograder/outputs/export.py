@@ -1,0 +1,148 @@
+"""Final grades out of nbgrader's gradebook, in the shapes a university uploads.
+
+``python -m autograder export`` reads the gradebook (after marking) and writes, into ``OUT``:
+
+- ``canvas.csv``: Canvas's gradebook import (Gradebook → Import): the columns ``Student``,
+  ``ID``, ``SIS User ID``, ``SIS Login ID``, ``Section``, then one column per question and the
+  total, one row per student;
+- ``moodle.csv``: Moodle's "Import grades: CSV file": ``ID number``, ``First name``,
+  ``Last name``, ``Email address``, one column per question, the late penalty and the total;
+- ``grades-long.csv``: the archive, one row per student, notebook and graded cell, with the
+  automatic and manual scores, extra credit, whether the cell was marked, and the comment.
+
+A student's name, e-mail and LMS id come from nbgrader's student table (``nbgrader db student
+import`` fills it). Marks are rounded to ``decimals`` places; each question's column is its
+notebook's score. The late penalty, taken from the total, is ``late_per_day`` percent of the
+assignment's marks per started day after the due date (with any extension nbgrader records),
+never more than the total. While a written answer waits for a marker, :func:`unmarked` lists it
+and the command refuses to write final grades unless told ``--allow-unmarked``.
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime as dt
+import math
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..course import COURSE_ID
+from ..model import ASSIGNMENT, format_score
+
+
+@dataclass
+class StudentGrades:
+    """One student's row: identity, per-notebook scores, lateness."""
+
+    student: str
+    first_name: str = ""
+    last_name: str = ""
+    email: str = ""
+    lms_user_id: str = ""
+    scores: dict[str, float] = field(default_factory=dict)     #: notebook -> score
+    cells: list[dict] = field(default_factory=list)             #: the long-format rows
+    timestamp: dt.datetime | None = None
+    due: dt.datetime | None = None
+    extension: dt.timedelta | None = None
+
+
+def read_gradebook(db_url: str, notebooks: list[str]) -> list[StudentGrades]:
+    """Every student of the gradebook, with the scores of ``notebooks`` (0 if not submitted)."""
+    from nbgrader.api import Gradebook, MissingEntry
+
+    rows = []
+    with warnings.catch_warnings(), Gradebook(db_url, course_id=COURSE_ID) as gb:
+        warnings.simplefilter("ignore")
+        for st in sorted(gb.students, key=lambda s: s.id):
+            row = StudentGrades(st.id, st.first_name or "", st.last_name or "", st.email or "",
+                                st.lms_user_id or "", {nb: 0.0 for nb in notebooks})
+            try:
+                sub = gb.find_submission(ASSIGNMENT, st.id)
+            except MissingEntry:
+                rows.append(row)
+                continue
+            row.timestamp, row.due, row.extension = sub.timestamp, sub.duedate, sub.extension
+            for nb in sub.notebooks:
+                row.scores[nb.name] = float(nb.score or 0.0)
+                row.cells += [_long_row(st.id, nb.name, g, nb) for g in nb.grades]
+            rows.append(row)
+    return rows
+
+
+def _long_row(student: str, notebook: str, g, nb) -> dict:
+    comment = next((c.comment or c.auto_comment or "" for c in nb.comments if c.name == g.name),
+                   "")
+    opt = lambda x: "" if x is None else format_score(x)  # noqa: E731
+    return {"student": student, "notebook": notebook, "grade_id": g.name,
+            "score": format_score(g.score or 0.0), "max_score": format_score(g.max_score or 0.0),
+            "auto_score": opt(g.auto_score), "manual_score": opt(g.manual_score),
+            "extra_credit": opt(g.extra_credit), "marked": "no" if g.needs_manual_grade else "yes",
+            "comment": comment}
+
+
+def unmarked(rows: list[StudentGrades]) -> list[str]:
+    """``student/notebook/grade_id`` of every answer still waiting for a marker."""
+    return [f"{c['student']}/{c['notebook']}/{c['grade_id']}"
+            for r in rows for c in r.cells if c["marked"] == "no"]
+
+
+def late_penalty(row: StudentGrades, total_max: float, late_per_day: float,
+                 due: dt.datetime | None = None) -> float:
+    """Marks taken for lateness: ``late_per_day`` % of ``total_max`` per started day late.
+
+    ``due`` (naive UTC) replaces the gradebook's due date, keeping the student's extension.
+    """
+    if late_per_day < 0:
+        raise ValueError(f"late_per_day must be >= 0, got {late_per_day}")
+    deadline = row.due if due is None else due + (row.extension or dt.timedelta(0))
+    handed_in, deadline = _naive_utc(row.timestamp), _naive_utc(deadline)
+    if handed_in is None or deadline is None or handed_in <= deadline:
+        return 0.0
+    days = math.ceil((handed_in - deadline).total_seconds() / 86400.0)
+    return min(sum(row.scores.values()), days * late_per_day / 100.0 * total_max)
+
+
+def _naive_utc(when: dt.datetime | None) -> dt.datetime | None:
+    """``when`` as a naive UTC datetime (nbgrader stores naive UTC)."""
+    if when is None or when.tzinfo is None:
+        return when
+    return when.astimezone(dt.timezone.utc).replace(tzinfo=None)
+
+
+def write_all(rows: list[StudentGrades], maxima: dict[str, float], out: Path, *,
+              decimals: int = 1, late_per_day: float = 0.0,
+              due: dt.datetime | None = None) -> list[Path]:
+    """Write ``canvas.csv``, ``moodle.csv`` and ``grades-long.csv``; returns their paths."""
+    if decimals < 0:
+        raise ValueError(f"decimals must be >= 0, got {decimals}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    total_max = sum(maxima.values())
+    fmt = lambda x: format_score(round(x, decimals))  # noqa: E731
+    canvas, moodle = [], []
+    for r in rows:
+        penalty = late_penalty(r, total_max, late_per_day, due)
+        per_q = [fmt(r.scores[nb]) for nb in maxima]
+        total = fmt(max(0.0, sum(r.scores.values()) - penalty))
+        name = f"{r.last_name}, {r.first_name}".strip(", ") or r.student
+        canvas.append([name, r.lms_user_id, r.student, r.email, "", *per_q, total])
+        moodle.append([r.student, r.first_name, r.last_name, r.email, *per_q, fmt(penalty),
+                       total])
+    heads = [f"{nb} ({format_score(m)})" for nb, m in maxima.items()]
+    paths = [out / "canvas.csv", out / "moodle.csv", out / "grades-long.csv"]
+    _write(paths[0], ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", *heads,
+                      f"{ASSIGNMENT} total ({format_score(total_max)})"], canvas)
+    _write(paths[1], ["ID number", "First name", "Last name", "Email address", *heads,
+                      "Late penalty", f"{ASSIGNMENT} total"], moodle)
+    long_cols = ["student", "notebook", "grade_id", "score", "max_score", "auto_score",
+                 "manual_score", "extra_credit", "marked", "comment"]
+    _write(paths[2], long_cols, [[c[k] for k in long_cols] for r in rows for c in r.cells])
+    return paths
+
+
+def _write(path: Path, header: list[str], rows: list[list[str]]) -> None:
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(header)
+        w.writerows(rows)
