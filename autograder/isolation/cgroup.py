@@ -7,8 +7,9 @@ job is limited by rlimits alone.
 from __future__ import annotations
 
 import os
-import signal
 import time
+
+from .identity import kill_until_gone
 
 V1_ROOT = "/sys/fs/cgroup"
 V2_ROOT = "/sys/fs/cgroup"
@@ -84,17 +85,11 @@ class JobCgroup:
 
 
 def _empty(path: str) -> None:
-    for _ in range(100):
+    """Kill every process left in the cgroup at ``path``."""
+    def members() -> list[int]:
         try:
             with open(os.path.join(path, "cgroup.procs")) as f:
-                pids = [int(x) for x in f.read().split()]
+                return [int(x) for x in f.read().split()]
         except OSError:
-            return
-        if not pids:
-            return
-        for pid in pids:
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except OSError:
-                pass
-        time.sleep(0.01)
+            return []
+    kill_until_gone(members, patience=1.0)

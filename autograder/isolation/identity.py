@@ -86,9 +86,14 @@ def uid_processes(uid: int) -> list[int]:
 
 def kill_uid_processes(uid: int, patience: float = 5.0) -> None:
     """SIGKILL every process of ``uid`` until none is left (or ``patience`` runs out)."""
+    kill_until_gone(lambda: uid_processes(uid), patience)
+
+
+def kill_until_gone(list_pids, patience: float = 5.0) -> None:
+    """SIGKILL every pid ``list_pids()`` names until it names none (or ``patience`` runs out)."""
     end = time.monotonic() + patience
     while True:
-        pids = uid_processes(uid)
+        pids = list_pids()
         if not pids or time.monotonic() > end:
             return
         for pid in pids:

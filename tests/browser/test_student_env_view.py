@@ -10,16 +10,12 @@ sees nbgrader's Validate button, the kernel imports ``course_lib`` from that env
 from __future__ import annotations
 
 import re
-import signal
-import subprocess
-import sys
-import time
-import urllib.request
 
 import pytest
 import studentenv
 
 from autograder.course import nbgrader_env
+from labtools import running_lab
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.xdist_group("student_env")]
 
@@ -28,37 +24,11 @@ pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.xdist_group("st
 def student_env_lab(tmp_path, repo_root, free_port):
     """URL of ``autograder lab --role student`` run in the tests' student environment."""
     studentenv.python()  # build and install first (minutes on a cold cache), then time the start
-    log = open(tmp_path / "lab.log", "w+")
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "autograder", "lab", "--role", "student", "--port", str(free_port),
-         "--no-browser", "--course-root", str(tmp_path / "course"),
-         "--student-env", str(studentenv.ENV_DIR), "--build-cache", str(studentenv.BUILD_CACHE)],
-        cwd=repo_root, env=nbgrader_env(), stdout=log, stderr=subprocess.STDOUT, text=True)
-    try:
-        deadline, url = time.monotonic() + 180, None
-        while time.monotonic() < deadline and proc.poll() is None:
-            log.seek(0)
-            m = re.search(rf"(http://localhost:{free_port}/\S*\?token=\w+)", log.read())
-            if m:
-                try:
-                    with urllib.request.urlopen(m.group(1), timeout=5) as r:
-                        if r.status == 200:
-                            url = m.group(1)
-                            break
-                except OSError:
-                    pass
-            time.sleep(0.5)
-        if url is None:
-            log.seek(0)
-            pytest.fail(f"the student lab did not come up:\n{log.read()[-3000:]}")
+    args = ["--role", "student", "--course-root", str(tmp_path / "course"),
+            "--student-env", str(studentenv.ENV_DIR), "--build-cache", str(studentenv.BUILD_CACHE)]
+    with running_lab(args, free_port, tmp_path / "lab.log", repo_root, nbgrader_env(),
+                     "the student lab") as url:
         yield url
-    finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-        log.close()
 
 
 def test_student_env_shows_docstring_not_source(page, student_env_lab, artifacts):
