@@ -101,3 +101,29 @@ def mark(course: Path, student: str, notebook: str, grade_id: str, score: float,
             return grader.locator("body").inner_text()
         finally:
             browser.close()
+
+
+def mark_in_subprocess(course: Path, student: str, notebook: str, grade_id: str, score: float,
+                       comment: str, artifacts: Path, timeout: float = 600) -> str:
+    """:func:`mark` in a Python of its own.
+
+    Playwright's sync API refuses to start inside a process where another sync Playwright (the
+    browser tests' session-wide browser, on the same xdist worker) already runs an event loop.
+    """
+    import json
+
+    args = json.dumps([str(course), student, notebook, grade_id, score, comment, str(artifacts)])
+    out = subprocess.run([sys.executable, str(Path(__file__).resolve()), args], cwd=REPO,
+                         env=nbgrader_env(), capture_output=True, text=True, timeout=timeout)
+    if out.returncode != 0:
+        raise RuntimeError(f"marking in the Formgrader failed:\n{out.stderr[-4000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+if __name__ == "__main__":
+    import json
+
+    course_, student_, notebook_, grade_id_, score_, comment_, artifacts_ = json.loads(sys.argv[1])
+    text = mark(Path(course_), student_, notebook_, grade_id_, float(score_), comment_,
+                Path(artifacts_))
+    print(json.dumps(text))
