@@ -2,8 +2,9 @@
 
 Hidden cases come from a generator seeded with HMAC-SHA256 of the course secret over the
 assignment, the student, the graded name and a digest of ALL the student's solution code that
-runs for that notebook (:func:`notebook_digest`: every planned cell's syntax tree, so comments
-and spacing do not count). Re-grading the same submission draws the same cases (same CSV,
+runs for that notebook (:func:`notebook_digest`: every planned cell's exact text, comments and
+spacing included, since student code can read its own cells' text in the sandbox and a comment
+could carry a table). Re-grading the same submission draws the same cases (same CSV,
 feedback, report); a change to ANY solution cell of the notebook (the graded function's, a
 helper's, a choice's) draws new hidden cases for every name, so a table of hidden inputs
 printed on one run, wherever it lives, gains nothing on the next (red-team finding 1).
@@ -14,7 +15,6 @@ any one case's answer (finding 3).
 
 from __future__ import annotations
 
-import ast
 import hashlib
 import hmac
 import sys
@@ -32,13 +32,13 @@ CAP_FLOOR = 64 * 2**10
 
 
 def solution_digest(code: str) -> str:
-    """SHA-256 of a solution's syntax tree (its text, spaces collapsed, if it does not parse or
-    is nested too deeply to dump)."""
-    try:
-        text = ast.dump(ast.parse(code), annotate_fields=False)
-    except (SyntaxError, ValueError, RecursionError, MemoryError):
-        text = "text:" + " ".join(code.split())
-    return hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
+    """SHA-256 of a solution cell's exact text.
+
+    Not of its syntax tree: the sandbox's code can read every cell's text, so a table hidden in
+    a comment, in spacing, or behind an expression too deep to parse must change the seed too
+    (red-team findings 1 and N1).
+    """
+    return hashlib.sha256(code.encode("utf-8", "surrogatepass")).hexdigest()
 
 
 def notebook_digest(sources) -> str:

@@ -97,9 +97,15 @@ def test_reference_imports_are_found_but_data_tables_are_allowed():
     assert not reference_import(ast.parse("import numpy as np"))
 
 
-def test_hidden_seed_follows_the_solution_not_its_comments():
+def test_hidden_seed_follows_every_character_of_the_solution():
+    """The sandbox's code can read its cells' text: a comment or a space could carry a lookup
+    table, so they too draw new hidden cases (red team N1)."""
     a = solution_digest("def f(x):\n    return x  # one\n")
-    assert a == solution_digest("def f(x):\n\n    return x   # two\n")
+    assert a == solution_digest("def f(x):\n    return x  # one\n")
+    assert a != solution_digest("def f(x):\n    return x  # two\n")
+    assert a != solution_digest("def f(x):\n    return x   # one\n")
+    deep = "_pad = " + "+".join(["1"] * 3000) + "\n"
+    assert solution_digest(deep + "_T = 'A B'\n") != solution_digest(deep + "_T = 'A  B'\n")
     assert a != solution_digest("def f(x):\n    return -x\n")
     assert case_seed(b"s", "kim", "f", a) != case_seed(b"s", "kim", "f", solution_digest("x=1"))
     assert case_seed(b"s", "kim", "f", a) == case_seed(b"s", "kim", "f", a)
@@ -108,7 +114,7 @@ def test_hidden_seed_follows_the_solution_not_its_comments():
 def test_hidden_seed_follows_every_solution_cell_of_the_notebook():
     f, helper = "def f(x):\n    return _impl(x)\n", "def _impl(x):\n    return x\n"
     base = notebook_digest([helper, f])
-    assert base == notebook_digest([helper + "# a comment\n", f])       # comments do not count
+    assert base != notebook_digest([helper + "# a comment\n", f])       # comments count too
     changed = notebook_digest([helper.replace("return x", "return -x"), f])  # ANOTHER cell
     assert case_seed(b"s", "kim", "f", base) != case_seed(b"s", "kim", "f", changed)
     assert base != notebook_digest([helper, f, "table = 1\n"])           # an added cell
