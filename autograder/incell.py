@@ -18,8 +18,12 @@ from __future__ import annotations
 
 import numpy as np
 
+import sys
+
+from course_lib.variants import student_id
+
 from .exercises import get
-from .judging import call_in_process, judge_case, judge_choice
+from .judging import call_in_process, judge_case, judge_item
 from .model import CaseOutcome, OutcomeKind, Verdict
 
 #: The seed of the in-kernel hidden cases (the batch grader draws its own from the course secret).
@@ -37,12 +41,17 @@ def run_cases(name: str, func, seed: int = INCELL_SEED) -> list[tuple[object, st
     return results
 
 
-def check(name: str, func_or_value) -> None:
-    """Assert that a graded function (or a multiple-choice answer) passes all its cases."""
+def check(name: str, func_or_value, student: str | None = None) -> None:
+    """Assert that a graded function (or a choice or number item) passes all its cases.
+
+    Choices and number items are judged for ``student`` (default: the working student,
+    :func:`course_lib.variants.student_id`, with the notebook's ``STUDENT_ID`` as typed id)."""
     ex = get(name)
-    if ex.kind == "choice":
+    if ex.kind in ("choice", "value"):
+        if student is None:
+            student = student_id(getattr(sys.modules.get("__main__"), "STUDENT_ID", "") or "")
         outcome = CaseOutcome(0, OutcomeKind.RETURNED, value=func_or_value)
-        verdict, why = judge_choice(ex, outcome)
+        verdict, why = judge_item(ex, outcome, student)
         assert verdict is Verdict.PASS, f"{name}: {why}"
         return
     failures = [(c, why) for c, why in run_cases(name, func_or_value) if why is not None]

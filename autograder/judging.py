@@ -104,14 +104,34 @@ def _judge_raised(case, outcome: CaseOutcome) -> tuple[Verdict, str]:
     return Verdict.ERROR, f"raised {outcome.error_type}: {clip(outcome.message, 300)}"
 
 
-def judge_choice(ex: Exercise, outcome: CaseOutcome) -> tuple[Verdict, str]:
-    """``(verdict, reason)`` of a multiple-choice answer (its one "case" is the variable)."""
+def judge_choice(ex: Exercise, outcome: CaseOutcome,
+                 student: str | None = None) -> tuple[Verdict, str]:
+    """``(verdict, reason)`` of a multiple-choice answer (its one "case" is the variable),
+    against the key in ``student``'s order of the options (``None``: the canonical order)."""
     if OutcomeKind(outcome.kind) is not OutcomeKind.RETURNED:
         return judge_case(ex, _NO_CASE, None, outcome)
-    why = same_choice(ex.answer, outcome.value, ex.options, name=ex.name)
+    why = same_choice(ex.key_for(student), outcome.value, ex.options, name=ex.name,
+                      single=isinstance(ex.answer, str))
     if why is None:
         return Verdict.PASS, ""
     return Verdict(why.kind), why.text
+
+
+def judge_value(ex: Exercise, outcome: CaseOutcome, student: str) -> tuple[Verdict, str]:
+    """``(verdict, reason)`` of a number item against the answer for ``student``'s numbers."""
+    if OutcomeKind(outcome.kind) is not OutcomeKind.RETURNED:
+        return judge_case(ex, _NO_CASE, None, outcome)
+    if outcome.value is None:
+        return Verdict.UNANSWERED, (f"not answered: {ex.name} is None; set it to your answer "
+                                    "for your own numbers")
+    return _judge_returned(ex, _NO_CASE, ex.value_for(student), outcome.value)
+
+
+def judge_item(ex: Exercise, outcome: CaseOutcome, student: str | None) -> tuple[Verdict, str]:
+    """A choice or a value item, judged for ``student``."""
+    if ex.kind == "value":
+        return judge_value(ex, outcome, student)
+    return judge_choice(ex, outcome, student)
 
 
 class _NoCase:
@@ -155,7 +175,7 @@ def summarise(records: list[CaseRecord], points: float,
         return 0.0, Status.REFERENCE_USED, (f"{clip(ref.reason, 160)}: a graded function must "
                                             "be your own work, so this test scores 0")
     score = round(points * passed / n, 6)
-    if kind is CellKind.CHOICE:
+    if kind in (CellKind.CHOICE, CellKind.VALUE):
         return score, _status_of(counts) if counts else Status.OK, \
             ("correct" if not counts else clip(records[0].reason, 300))
     if passed == n:
@@ -195,9 +215,7 @@ def unanswered_or_broken(name: str, kind: CellKind, hint: AnswerHint, defined: b
                                    f"define the {what} {name} there and resubmit")
     if shape is AnswerShape.NONE:
         return Status.UNANSWERED, (f"not answered: your cell sets {name} to None; "
-                                   + (f"define it with def {name}(...)" if kind is
-                                      CellKind.FUNCTION else "set it to option letters such as "
-                                      "\"b\"") + " and resubmit")
+                                   + _how_to_answer(name, kind) + " and resubmit")
     if shape is AnswerShape.NOT_A_FUNCTION and kind is CellKind.FUNCTION:
         return Status.FAILED, (f"{name} must be a function (def {name}(...)), but your cell "
                                f"sets it to {hint.detail}; keep the released signature")
@@ -210,6 +228,14 @@ def unanswered_or_broken(name: str, kind: CellKind, hint: AnswerHint, defined: b
                               f"cells{why}; run your notebook top to bottom (Restart & Run All) "
                               "to find the error")
     return None
+
+
+def _how_to_answer(name: str, kind: CellKind) -> str:
+    if kind is CellKind.FUNCTION:
+        return f"define it with def {name}(...)"
+    if kind is CellKind.VALUE:
+        return "set it to your answer for your own numbers"
+    return "set it to option letters such as \"b\""
 
 
 def reference_imported(name: str, reference: str) -> tuple[Status, str]:

@@ -23,6 +23,7 @@ class CellKind(str, enum.Enum):
 
     FUNCTION = "function"   #: a graded function, run on visible and hidden cases
     CHOICE = "choice"       #: a multiple-choice variable (a string of option letters)
+    VALUE = "value"         #: a number item worked on the student's own numbers (issue 11)
     MANUAL = "manual"       #: a written answer, marked by hand
 
 

@@ -1,6 +1,8 @@
 """Fixtures shared by every test area (areas add their own ``tests/<area>/conftest.py``).
 
 - ``MPLBACKEND=Agg`` for this process and every kernel or subprocess it starts;
+- ``JUPYTERHUB_USER=ci-student`` likewise (unless set): the student whose own numbers
+  (``course_lib.variants``) the notebooks work when the tests run them, as on the hub;
 - ``repo_root``: the repository root;
 - ``source_notebooks``: the committed ``notebooks/q*.ipynb`` (skips when none exist yet);
 - ``course``: a session-scoped nbgrader course (``autograder.course.prepare_course``) in a
@@ -16,6 +18,9 @@ from pathlib import Path
 import pytest
 
 os.environ["MPLBACKEND"] = "Agg"
+os.environ.setdefault("JUPYTERHUB_USER", "ci-student")
+#: the student id every notebook run by the tests works as (see course_lib.variants)
+CI_STUDENT = os.environ["JUPYTERHUB_USER"]
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 

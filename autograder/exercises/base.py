@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from course_lib import variants
 from course_lib.answers import ChoiceFormatError, choice_letters
 
 
@@ -80,11 +81,16 @@ class Case:
 
 @dataclass(frozen=True)
 class Exercise:
-    """A graded function (``kind="function"``) or a multiple-choice answer (``kind="choice"``).
+    """A graded function (``kind="function"``), a multiple-choice answer (``kind="choice"``) or
+    a number item on the student's own numbers (``kind="value"``, issue 11).
 
     ``name`` is the grade_id of the solution cell and the name the student defines; its test cell
-    is ``test_<name>``. For a choice, ``answer`` is the correct option (a string such as ``"b"``,
-    or a frozenset of options for "select all that apply") and ``options`` the allowed ones.
+    is ``test_<name>``. For a choice, ``answer`` is the correct option in the *canonical* order
+    (a string such as ``"b"``, or a frozenset of options for "select all that apply") and
+    ``options`` the allowed ones; each student sees the options in their own order
+    (:func:`course_lib.variants.option_order`), so :meth:`key_for` gives their letters. For a
+    value, ``solve`` computes the answer from the student's
+    :class:`~course_lib.variants.Variant` with the course's references, on the grader's side.
     """
 
     name: str
@@ -96,6 +102,18 @@ class Exercise:
     answer: Any = None
     options: tuple = ()
     description: str = ""
+    solve: Callable[[Any], Any] | None = None
+
+    def key_for(self, student: str | None) -> str:
+        """A choice's key as the letters ``student`` sees (``None``: the canonical letters)."""
+        key = choice_key(self.answer)
+        if student is None:
+            return key
+        return variants.displayed_letters(self.name, key, len(self.options), student)
+
+    def value_for(self, student: str):
+        """A value item's plain-data answer for ``student``'s numbers."""
+        return to_plain(self.solve(variants.variant(self.notebook, student)))
 
     def draw_cases(self, rng: np.random.Generator) -> list[Case]:
         """The exercise's cases drawn from ``rng`` (``cases`` may return any iterable, e.g. be a
@@ -105,6 +123,35 @@ class Exercise:
     def expected(self, case: Case):
         """The reference's plain-data answer for ``case`` (only for ``raises is None``)."""
         return to_plain(self.reference(*case.args, **case.kwargs))
+
+
+#: The tolerance of every number item (issue 11), stated in each notebook: three significant
+#: figures are enough.
+NUMBER_RTOL, NUMBER_ATOL = 5e-3, 1e-3
+
+
+def number_item(name: str, notebook: str, solve: Callable[[Any], Any],
+                description: str) -> Exercise:
+    """A number item worked on the student's own numbers: ``solve(variant)`` gives the answer
+    with the course's references; answers within 0.5 % (or 0.001) of it pass."""
+    return Exercise(name=name, notebook=notebook, kind="value", solve=solve,
+                    compare=numbers_close, description=description)
+
+
+def numbers_close(expected, received) -> Mismatch | None:
+    """:func:`close` at the number items' tolerance; a list or tuple of numbers stands for an
+    array (students type ``[1.5, 2.0]``), and ``True``/``False`` for 1 and 0."""
+    if isinstance(expected, np.ndarray) and isinstance(received, tuple):
+        try:
+            received = np.array(received, dtype=float)
+        except (TypeError, ValueError):
+            return wrong_shape(f"wrong type (expected numbers of shape {expected.shape}, got "
+                               f"{describe(received)})")
+    if isinstance(received, np.ndarray) and received.dtype == bool:
+        received = received.astype(float)
+    if isinstance(expected, np.ndarray) and expected.dtype == bool:
+        expected = expected.astype(float)
+    return _close(expected, received, NUMBER_RTOL, NUMBER_ATOL)
 
 
 # --------------------------------------------------------------------------------------------
@@ -209,14 +256,17 @@ def choice_key(answer) -> str:
     return answer if isinstance(answer, str) else "".join(sorted(answer))
 
 
-def same_choice(expected, received, options="abcd", name: str = "the answer") -> Mismatch | None:
+def same_choice(expected, received, options="abcd", name: str = "the answer",
+                single: bool | None = None) -> Mismatch | None:
     """Multiple choice: ``received`` normalised by :func:`course_lib.answers.choice_letters`
     (case, spaces and commas ignored) against the key. No answer at all is an ``unanswered``
-    mismatch, an answer of the wrong form a wrong shape, other letters a wrong value."""
+    mismatch, an answer of the wrong form a wrong shape, other letters a wrong value.
+    ``single`` (default: a one-letter ``str`` key) says the item wants exactly one letter."""
     key = choice_key(expected)
+    if single is None:
+        single = isinstance(expected, str) and len(key) == 1
     try:
-        got = choice_letters(received, "".join(options) or "abcd", name=name,
-                             single=isinstance(expected, str) and len(key) == 1)
+        got = choice_letters(received, "".join(options) or "abcd", name=name, single=single)
     except ChoiceFormatError as exc:
         return Mismatch("unanswered" if exc.unanswered else "wrong-shape", str(exc))
     return None if got == key else wrong_value("wrong answer")

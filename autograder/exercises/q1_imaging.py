@@ -8,9 +8,11 @@ no sizes: 40 mm blocks of fat, liver and water under 10 mm of water, 5 MHz; the 
 
 from __future__ import annotations
 
+import numpy as np
+
 from course_lib import ultrasound
 
-from .base import Case, Exercise, close
+from .base import Case, Exercise, close, number_item
 
 # speeds (m/s) and attenuations (dB/cm/MHz) of the course's material table
 _C = {name: p["c"] for name, p in ultrasound.MATERIALS.items()}
@@ -134,3 +136,11 @@ EXERCISES = [
     Exercise(name="floor_under_liver", notebook="q1_imaging", kind="choice", answer="b",
              options=_choices, description="Q1(c) displayed bath floor under the liver"),
 ]
+
+
+# Q1(c) on the student's own numbers (course_lib.variants): where the far face of each of their
+# three layers is drawn, in mm, by a scanner that assumes 1540 m/s.
+EXERCISES.append(number_item(
+    "q1c_your_depths", "q1_imaging",
+    lambda v: ultrasound.displayed_depths(np.array(v.thicknesses), np.array(v.speeds)),
+    "Q1(c) on your numbers: displayed depths of your three layers' far faces (mm)"))

@@ -14,7 +14,7 @@ import numpy as np
 
 from course_lib import gamma_camera
 
-from .base import Case, Exercise, close, wrong_shape
+from .base import Case, Exercise, close, wrong_shape, number_item
 
 NB = "q2_nuclear"
 _REL = close(rtol=1e-9, atol=1e-12)
@@ -197,3 +197,10 @@ EXERCISES = [
     Exercise(name="q2d_model_bias", notebook=NB, kind="choice", answer="a",
              options=_ABCD, description="Q2(d) all-or-nothing overstates the transmission"),
 ]
+
+
+# Q2(c) on the student's own numbers: the hole length giving resolution R at distance z (mm).
+EXERCISES.append(number_item(
+    "q2c_your_length", "q2_nuclear",
+    lambda v: float(gamma_camera.collimator_length_for_resolution(v.d, v.R, v.z)),
+    "Q2(c) on your numbers: the hole length L (mm) that gives resolution R at z"))

@@ -26,7 +26,7 @@ import numpy as np
 from course_lib import marching_cubes as mc
 from course_lib import mesh
 
-from .base import Case, Exercise, Mismatch, close, describe, wrong_shape
+from .base import Case, Exercise, Mismatch, close, describe, wrong_shape, number_item
 
 NB = "q3_marching_cubes"
 
@@ -404,4 +404,15 @@ EXERCISES = [
     _choice("q3c_ambiguous", "d", "Q3(c) which cases are ambiguous"),
     _choice("q3c_hole", "a", "Q3(c) what the ambiguity is and what goes wrong"),
     _choice("q3d_conditions", "c", "Q3(d) conditions for the volume to be meaningful"),
+]
+
+
+# Q3(a) on the student's own numbers: the vertex on their crossed edge, and their cell's case.
+EXERCISES += [
+    number_item("q3a_your_vertex", NB,
+                lambda v: mc.interpolate_edge(np.array(v.p0), np.array(v.p1), v.v0, v.v1, v.iso),
+                "Q3(a) on your numbers: where the vertex lies on your crossed edge"),
+    number_item("q3a_your_case", NB,
+                lambda v: int(mc.cube_index(np.array(v.corner_values), v.iso)),
+                "Q3(a) on your numbers: the case number (0-255) of your cell"),
 ]

@@ -13,7 +13,7 @@ import numpy as np
 
 from course_lib import splines
 
-from .base import Case, Exercise, close
+from .base import Case, Exercise, close, number_item
 
 NB = "q4_splines"
 RULES = ("d=b", "d=2c-b", "d=c")
@@ -211,3 +211,17 @@ EXERCISES = [
              options=("a", "b", "c", "d"),
              description="Q4(c)(ii) B-spline: rest at (b+2c)/3 vs reaching c with speed"),
 ]
+
+
+def _your_end(v) -> np.ndarray:
+    """p(1), p'(1), p''(1) of the last segment [a; b; c; d], d the phantom of the rule."""
+    M = splines.catmull_rom_basis() if v.kind == "catmull-rom" else splines.bspline_basis()
+    a, b, c = (np.array(p, dtype=float) for p in (v.a, v.b, v.c))
+    d = splines.phantom_point(b, c, v.rule)
+    return np.array(splines.end_derivatives(M, a, b, c, d))
+
+
+# Q4(c)(i) on the student's own numbers: the end of their curve under their rule.
+EXERCISES.append(number_item(
+    "q4ci_your_end", NB, _your_end,
+    "Q4(c)(i) on your numbers: p(1), p'(1), p''(1) of your last segment, shape (3, 2)"))

@@ -15,7 +15,7 @@ import numpy as np
 
 from course_lib import shading
 
-from .base import Case, Exercise, close
+from .base import Case, Exercise, close, number_item
 
 NB = "q5_phong"
 _COMPARE = close(rtol=1e-6, atol=1e-9)
@@ -193,3 +193,11 @@ EXERCISES = [
              answer=frozenset({"a", "c"}), options=_choices,
              description="Q5(d) Item Q5.4: remedies for colour aliasing (all that apply)"),
 ]
+
+
+# Q5(b) on the student's own numbers: the reflected intensity of each colour.
+EXERCISES.append(number_item(
+    "q5b_your_intensity", NB,
+    lambda v: shading.phong(np.array(v.colour), v.Ia, v.ka, v.Ip, v.kd, v.ks, v.n,
+                            np.array(v.L), np.array(v.N), np.array(v.V)),
+    "Q5(b) on your numbers: (I_r, I_g, I_b)"))

@@ -20,7 +20,7 @@ import numpy as np
 
 from course_lib import clipping
 
-from .base import Case, Exercise, close, describe, wrong_shape
+from .base import Case, Exercise, close, describe, wrong_shape, number_item
 
 #: The exam's triangles in homogeneous screen coordinates (see the module docstring).
 EXAM_A = np.array(clipping.EXAM_Q6["A"])
@@ -287,4 +287,15 @@ EXERCISES = [
             "Q6(b)(ii), Item Q6.3: A is larger than B in the world; both are edge-on"),
     _choice("q6_when_decompose", "d",
             "Q6(c), Item Q6.4: decompose into triangles right after clipping"),
+]
+
+
+# Q6(b) on the student's own numbers: which vertices are inside, and where they land on screen.
+EXERCISES += [
+    number_item("q6bi_your_inside", NB,
+                lambda v: clipping.inside_view_volume(np.array(v.vertices, dtype=float)),
+                "Q6(b)(i) on your numbers: which of your three vertices are inside"),
+    number_item("q6bii_your_screen", NB,
+                lambda v: clipping.to_screen(np.array(v.vertices, dtype=float)),
+                "Q6(b)(ii) on your numbers: your vertices in screen coordinates, shape (3, 3)"),
 ]

@@ -21,12 +21,14 @@ from .. import judging
 from ..course import TEXT_STUB
 from ..exercises import REGISTRY
 from ..isolation import CaseInput, Limits, Mode, NameJob, NotebookJob, run_notebook
+from ..isolation.jobs import CHOICE, FUNCTION
 from ..model import (ASSIGNMENT, AnswerHint, Batch, CaseRecord, CellKind, CellResult, NameRun,
                      SourceNotebook, Status, Submission, Verdict)
 from .cases import DrawnCase, case_seed, draw, notebook_digest
 from .planning import MAX_CELL_CODE, CellPlan, answer_hint, plan_cells
 from .progress import Progress
 from .reading import MAX_NOTEBOOK_MB, discover_students, read_submission
+from .whose import other_students
 
 #: Characters of printed output kept per graded cell for its feedback.
 PRINTED_CAP = 20_000
@@ -192,7 +194,7 @@ def grade_notebook(work: NotebookWork, opts: Options) -> list[CellResult]:
     try:
         prepared = {name: _prepare_name(work, name, opts) for name, _, _ in work.names}
         job = NotebookJob(f"{work.student}--{work.src.name}", work.src.setup_source,
-                          [p[0] for p in prepared.values()])
+                          [p[0] for p in prepared.values()], student=work.student)
         runs = run_notebook(job, opts.limits, opts.mode)
         held_hidden = any(not d.case.visible for _job, drawn, _hint in prepared.values()
                           for d in drawn)
@@ -213,7 +215,7 @@ def _prepare_name(work: NotebookWork, name: str,
     ex = REGISTRY[name]
     code = work.plan.python.get(work.plan.chosen[name], "")
     kind = CellKind(ex.kind)
-    if kind is CellKind.CHOICE:
+    if kind is not CellKind.FUNCTION:
         drawn = []
         inputs = [CaseInput((), {}, 2**16)]
     else:
@@ -224,7 +226,8 @@ def _prepare_name(work: NotebookWork, name: str,
                   for d in drawn]
     calls = [(tuple(d.case.args), dict(d.case.kwargs)) for d in drawn[:50]]
     hint = answer_hint(code, name, kind, calls)
-    return NameJob(name, ex.kind, list(work.plan.cells), inputs), drawn, hint
+    job_kind = FUNCTION if kind is CellKind.FUNCTION else CHOICE   # a choice or value: a variable
+    return NameJob(name, job_kind, list(work.plan.cells), inputs), drawn, hint
 
 
 def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
@@ -242,7 +245,7 @@ def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
         return CellResult(work.student, work.src.name, test_id, name, 0.0, points,
                           Status.GRADER_ERROR, "the sandbox returned nothing for this test; "
                           "the instructor will look into it", kind=kind, code=code)
-    records = _records(ex, kind, drawn, run, show_output)
+    records = _records(ex, kind, drawn, run, show_output, work.student)
     load_notes = _load_notes(run, show_output)
     score, status, message = judging.summarise(records, points, kind)
     if hint.reference and kind is CellKind.FUNCTION:
@@ -253,6 +256,8 @@ def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
         if override is not None:
             status, message = override
     notes = list(work.plan.notes.get(name, []))
+    if kind in (CellKind.CHOICE, CellKind.VALUE) and status is not Status.OK:
+        notes += _other_numbers(ex, run, work.sub)
     if notes:
         message += ". Note: " + "; ".join(notes)
     printed = _printed(run, records, reveal) if show_output else _hidden_printed(run, records)
@@ -279,10 +284,25 @@ def _hidden_printed(run: NameRun, records: list[CaseRecord]) -> str:
     return f"(what your code printed is {HIDDEN_OUTPUT})" if printed else ""
 
 
+def _other_numbers(ex, run: NameRun, sub) -> list[str]:
+    """A note when a wrong item fits the numbers of another student the notebook names."""
+    for other in other_students(sub):
+        try:
+            verdict, _ = judging.judge_item(ex, run.outcomes[0], other)
+        except Exception:  # noqa: BLE001 - a note only; never fail the grading over it
+            continue
+        if verdict is Verdict.PASS:
+            what = "option letters" if ex.kind == "choice" else "numbers"
+            return [f"this answer fits the {what} of student {other}, not yours "
+                    f"({sub.student}): every student answers on their own {what}, and "
+                    "the grade uses yours"]
+    return []
+
+
 def _records(ex, kind: CellKind, drawn: list[DrawnCase], run: NameRun,
-             show: bool = True) -> list[CaseRecord]:
-    if kind is CellKind.CHOICE:
-        verdict, reason = judging.judge_choice(ex, run.outcomes[0])
+             show: bool = True, student: str | None = None) -> list[CaseRecord]:
+    if kind is not CellKind.FUNCTION:
+        verdict, reason = judging.judge_item(ex, run.outcomes[0], student)
         return [CaseRecord(0, "your answer", True, verdict, reason)]
     records = []
     for i, (d, outcome) in enumerate(zip(drawn, run.outcomes, strict=True)):

@@ -14,7 +14,7 @@ import inspect
 import re
 from dataclasses import dataclass, field
 
-from ..isolation.child import ALLOWED_COURSE_MODULES, ALLOWED_REFERENCE
+from ..isolation.child import ALLOWED_COURSE_MODULES, ALLOWED_REFERENCE, ALLOWED_WHOLE_MODULES
 from ..model import AnswerHint, AnswerShape, CellKind, SourceNotebook, Status, Submission
 
 #: Characters of code in one cell the grader reads (parses, sends to the sandbox): an answer
@@ -218,6 +218,8 @@ def reference_import(tree: ast.AST) -> str:
                 if _is_course(alias.name) and alias.name not in ALLOWED_COURSE_MODULES:
                     return alias.name
         elif isinstance(node, ast.ImportFrom) and node.level == 0 and _is_course(node.module):
+            if node.module in ALLOWED_WHOLE_MODULES:
+                continue
             allowed = ALLOWED_REFERENCE.get(node.module, ())
             for alias in node.names:
                 full = f"{node.module}.{alias.name}"

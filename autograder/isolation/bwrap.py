@@ -166,10 +166,13 @@ def unsafe_command(job_file: str, site_dir: str, child_file: str, channel_fd: in
             "--channel-fd", str(channel_fd)]
 
 
-def child_env(home: str) -> dict[str, str]:
-    """The child's whole environment: one BLAS thread, a private HOME, nothing of ours."""
+def child_env(home: str, student: str = "") -> dict[str, str]:
+    """The child's whole environment: one BLAS thread, a private HOME, nothing of ours, and
+    the student whose notebook it is as ``JUPYTERHUB_USER`` (their numbers, issue 11)."""
     env = {"PATH": "/usr/bin:/bin", "HOME": home, "TMPDIR": home, "LANG": "C.UTF-8",
            "LC_ALL": "C.UTF-8", "MPLBACKEND": "Agg", "MPLCONFIGDIR": home}
+    if student:
+        env["JUPYTERHUB_USER"] = student
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
                 "NUMEXPR_NUM_THREADS", "VECLIB_MAXIMUM_THREADS"):
         env[var] = "1"

@@ -53,7 +53,10 @@ ARRAY_DTYPES = frozenset({"|b1", "|i1", "<i2", "<i4", "<i8", "|u1", "<u2", "<u4"
 #: ``course_lib`` is a reference: absent, and reported as such.
 ALLOWED_REFERENCE = {"course_lib.marching_cubes": ("CORNERS", "EDGES", "FACES", "N_TRIANGLES",
                                                    "TRI_TABLE")}
-ALLOWED_COURSE_MODULES = ("course_lib", *ALLOWED_REFERENCE)
+#: Whole modules of ``course_lib`` the sandbox holds as they are: they know no answer
+#: (``variants`` draws each student's numbers; the grader computes the answers on its side).
+ALLOWED_WHOLE_MODULES = ("course_lib.variants",)
+ALLOWED_COURSE_MODULES = ("course_lib", *ALLOWED_REFERENCE, *ALLOWED_WHOLE_MODULES)
 
 
 # ============================================================================================

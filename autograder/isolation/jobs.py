@@ -68,6 +68,9 @@ class NotebookJob:
     job_id: str
     setup_source: str
     names: list[NameJob]
+    #: whose notebook it is: the sandbox's ``JUPYTERHUB_USER``, so ``course_lib.variants``
+    #: draws this student's numbers whatever the notebook's first cell says
+    student: str = ""
 
 
 def validate_job(job: NotebookJob) -> None:
@@ -76,6 +79,8 @@ def validate_job(job: NotebookJob) -> None:
         raise ValueError(f"job must be a NotebookJob, got {type(job).__name__}")
     if type(job.setup_source) is not str:
         raise ValueError("job.setup_source must be a str")
+    if type(job.student) is not str or "\0" in job.student or "\n" in job.student:
+        raise ValueError("job.student must be a one-line str")
     seen = set()
     for nj in job.names:
         if type(nj.name) is not str or not nj.name.isidentifier():

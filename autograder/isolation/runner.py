@@ -283,7 +283,7 @@ def run_notebook(job: NotebookJob, limits: Limits = DEFAULT_LIMITS,
         rfd, wfd = os.pipe()
         argv, cwd = _command(mode, workdir, job_file, wfd, limits,
                              lease.uid if lease else None)
-        env = bwrap.child_env("/tmp" if mode is bwrap.Mode.ISOLATED else cwd)
+        env = bwrap.child_env("/tmp" if mode is bwrap.Mode.ISOLATED else cwd, job.student)
         with tempfile.TemporaryFile() as errfile:
             try:
                 proc = _spawn(argv, cwd, env, wfd, errfile, cgroup)

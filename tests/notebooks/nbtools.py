@@ -68,8 +68,9 @@ def graded_items(nb) -> dict[str, str]:
     """``{name: kind}`` of the auto-graded items of a notebook.
 
     An item is a code solution cell whose grade_id ``name`` has a graded test cell
-    ``test_<name>``; its kind is ``"function"`` when the cell defines ``def name(`` and
-    ``"choice"`` otherwise.
+    ``test_<name>``; its kind is ``"function"`` when the cell defines ``def name(``,
+    ``"choice"`` when an ``options_<name>`` cell lists its options (in each student's order)
+    and ``"value"`` (a number item on the student's own numbers) otherwise.
     """
     cells = {nbgrader_meta(c).get("grade_id"): c for c in nb.cells if nbgrader_meta(c)}
     items = {}
@@ -81,7 +82,8 @@ def graded_items(nb) -> dict[str, str]:
         if test is None or not nbgrader_meta(test).get("grade"):
             continue
         defines = re.search(rf"^\s*def {re.escape(gid)}\(", cell.source, re.MULTILINE)
-        items[gid] = "function" if defines else "choice"
+        items[gid] = ("function" if defines else
+                      "choice" if f"options_{gid}" in cells else "value")
     return items
 
 
