@@ -120,3 +120,17 @@ def errors_beyond_stubs(found: list[CellError]) -> list[str]:
                  and e.grade_id[5:] in stubbed
                  and e.evalue == f"name '{e.grade_id[5:]}' is not defined")
     ]
+
+
+def option_texts(nb, name: str) -> dict[str, str]:
+    """``{letter: text}`` of multiple-choice item ``name`` in the canonical order: the list its
+    ``options_<name>`` cell hands to ``mine.options`` (each student sees them shuffled)."""
+    import ast
+
+    cell = next((c for c in nb.cells if nbgrader_meta(c).get("grade_id") == f"options_{name}"),
+                None)
+    if cell is None:
+        return {}
+    call = ast.parse(cell.source).body[0].value
+    texts = ast.literal_eval(call.args[1])
+    return dict(zip("abcdefgh", texts))

@@ -18,7 +18,7 @@ from __future__ import annotations
 import re
 
 import pytest
-from nbtools import nbgrader_meta, read
+from nbtools import nbgrader_meta, option_texts, read
 
 from autograder.course import NOTEBOOKS_DIR
 from autograder.exercises import for_notebook
@@ -43,26 +43,22 @@ def rendered(text: str) -> str:
     return re.sub(r"\s+", " ", text).strip()
 
 
-def options_of(markdown: str) -> dict[str, str]:
-    found = re.findall(r"^\(([a-e])\)\s*(.+?)\s*$", markdown, flags=re.M)
-    return dict(found)
-
-
 def test_rendered_drops_latex():
     assert rendered(r"At $\tfrac13(\mathbf b + 2\mathbf c)$, at rest") == "At 13(b + 2c), at rest"
 
 
 def choice_items(cells):
+    """``(exercise, {letter: option}, test cell source, key)`` of every choice item."""
+    nb = read(NB_PATH)
     for ex in for_notebook("q4_splines"):
         if ex.kind == "choice":
             i = _index(cells, ex.name)
             key = ex.answer if isinstance(ex.answer, frozenset) else frozenset(ex.answer)
-            yield ex, cells[i - 1].source, cells[i + 1].source, key
+            yield ex, option_texts(nb, ex.name), cells[i + 1].source, key
 
 
 def test_choice_options_match_the_registry(cells):
-    for ex, prompt, _, key in choice_items(cells):
-        opts = options_of(prompt)
+    for ex, opts, _, key in choice_items(cells):
         assert tuple(sorted(opts)) == tuple(ex.options), (ex.name, sorted(opts))
         assert key <= set(opts), ex.name
 
@@ -71,8 +67,8 @@ def test_correct_option_is_rarely_the_longest(cells):
     items = list(choice_items(cells))
     assert len(items) >= 6
     longest_correct = []
-    for ex, prompt, _, key in items:
-        lengths = {k: len(rendered(v)) for k, v in options_of(prompt).items()}
+    for ex, opts, _, key in items:
+        lengths = {k: len(rendered(v)) for k, v in opts.items()}
         top = max(lengths.values())
         winners = [k for k, n in lengths.items() if n == top]
         if len(winners) == 1 and winners[0] in key:

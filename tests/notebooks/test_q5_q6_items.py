@@ -16,13 +16,12 @@ from __future__ import annotations
 import re
 
 import pytest
-from nbtools import nbgrader_meta, read
+from nbtools import nbgrader_meta, option_texts, read
 
 from autograder.course import NOTEBOOKS_DIR
 from autograder.exercises import REGISTRY
 
 STEMS = ("q5_phong", "q6_clipping")
-OPTION = re.compile(r"^- \*\*\(([a-d])\)\*\* (.*)$", re.M)
 
 
 def shown_length(text: str) -> int:
@@ -40,7 +39,7 @@ def choice_items(nb):
         if cell.cell_type == "code" and meta.get("solution") and ex is not None \
                 and ex.kind == "choice":
             question = next(j for j in range(i - 1, -1, -1) if nb.cells[j].cell_type == "markdown")
-            items.append((question, ex, dict(OPTION.findall(nb.cells[question].source))))
+            items.append((question, ex, option_texts(nb, ex.name)))
     return items
 
 

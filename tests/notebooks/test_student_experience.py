@@ -20,7 +20,7 @@ import math
 import re
 
 import pytest
-from nbtools import CELL_TIMEOUT, execute, nbgrader_meta, read
+from nbtools import CELL_TIMEOUT, execute, nbgrader_meta, option_texts, read
 
 from autograder.course import NOTEBOOKS_DIR, source_notebooks
 from autograder.exercises import REGISTRY
@@ -33,7 +33,6 @@ FIGURE_MIME = ("image/png", "application/vnd.jupyter.widget-view+json")
 #: A code line that draws: a plot helper, pyplot, an explorer.
 DRAWS = re.compile(r"\bplot\w*\(|\bplt\.|\b\w+_explorer\(|\bimshow\(|\bsubplots\(")
 #: An option line of a multiple-choice item: "- **(a)** text" (bold and bullet optional).
-OPTION = re.compile(r"^\s*(?:[-*]\s*)?(?:\*\*)?\(([a-h])\)(?:\*\*)?\s+(.+?)\s*$")
 
 
 def _is_graded_code(cell, key: str) -> bool:
@@ -106,30 +105,17 @@ def test_release_check_names_an_untagged_cell(tmp_path):
 
 # (b) ----------------------------------------------------------------------------------------
 
-def _parse_options(markdown: str) -> dict[str, str]:
-    """``{letter: text}``: one option per line, or else all on one line ``(a) x (b) y ...``."""
-    options = {m.group(1): m.group(2) for m in map(OPTION.match, markdown.splitlines()) if m}
-    if len(options) >= 2:
-        return options
-    for line in markdown.splitlines():
-        parts = re.split(r"(?:\*\*)?\(([a-h])\)(?:\*\*)?", line)
-        if len(parts) >= 5 and parts[1] == "a":
-            return {parts[k]: parts[k + 1].strip(" ,;") for k in range(1, len(parts) - 1, 2)}
-    return options
-
-
 def _choice_items():
     """``(notebook, name, {letter: option text}, key letters)`` of every multiple-choice item."""
     items = []
     for path in NOTEBOOKS:
-        cells = read(path).cells
-        for i, cell in enumerate(cells):
+        nb = read(path)
+        for cell in nb.cells:
             name = nbgrader_meta(cell).get("grade_id")
             exercise = REGISTRY.get(name)
             if not (_is_graded_code(cell, "solution") and exercise and exercise.kind == "choice"):
                 continue
-            above = cells[i - 1].source if i and cells[i - 1].cell_type == "markdown" else ""
-            options = _parse_options(above)
+            options = option_texts(nb, name)
             key = exercise.answer
             key = "".join(sorted(key)) if not isinstance(key, str) else choice_letters(key, "abcdefgh")
             items.append((path.stem, name, options, key))
