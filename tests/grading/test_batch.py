@@ -52,8 +52,9 @@ def _build(src, choice: dict[str, str]) -> dict:
         ex = REGISTRY[name]
         i = cell_index(nb, name)
         if kind == "wrong":
-            nb["cells"][i]["source"] = (f"{name} = 'z'\n" if ex.kind == "choice" else
-                                        f"def {name}(*args, **kwargs):\n    return 'wrong'\n")
+            nb["cells"][i]["source"] = {
+                "choice": f"{name} = 'z'\n", "value": f"{name} = -1.0e9\n",
+            }.get(ex.kind, f"def {name}(*args, **kwargs):\n    return 'wrong'\n")
         elif kind == "stub":
             nb["cells"][i]["source"] = stubbed["cells"][cell_index(stubbed, name)]["source"]
         elif kind == "deleted":
