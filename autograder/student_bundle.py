@@ -43,8 +43,9 @@ LIBRARY = "course_lib"
 LIBRARY_DIR = REPO_ROOT / LIBRARY
 DIST_NAME = "4f9-course-student"
 #: modules students may read: the multiple-choice *format* checker that visible test cells
-#: call (it holds no key: the grader alone does)
-SHIPPED_AS_SOURCE = ("course_lib.answers",)
+#: call (it holds no key: the grader alone does), and each student's numbers and order of
+#: options (a pure function of the id; no answers)
+SHIPPED_AS_SOURCE = ("course_lib.answers", "course_lib.variants")
 #: the instructors' requirements a student's environment needs (versions come from our own
 #: package metadata, so the two never disagree)
 STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "jupyterlab", "nbgrader")

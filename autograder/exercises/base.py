@@ -140,7 +140,8 @@ def number_item(name: str, notebook: str, solve: Callable[[Any], Any],
 
 def numbers_close(expected, received) -> Mismatch | None:
     """:func:`close` at the number items' tolerance; a list or tuple of numbers stands for an
-    array (students type ``[1.5, 2.0]``), and ``True``/``False`` for 1 and 0."""
+    array (students type ``[1.5, 2.0]``), and ``True``/``False`` for 1 and 0. A wrong value is
+    reported without its error, which would give a one-number answer away."""
     if isinstance(expected, np.ndarray) and isinstance(received, tuple):
         try:
             received = np.array(received, dtype=float)
@@ -151,7 +152,12 @@ def numbers_close(expected, received) -> Mismatch | None:
         received = received.astype(float)
     if isinstance(expected, np.ndarray) and expected.dtype == bool:
         expected = expected.astype(float)
-    return _close(expected, received, NUMBER_RTOL, NUMBER_ATOL)
+    why = _close(expected, received, NUMBER_RTOL, NUMBER_ATOL)
+    if why is not None and why.kind == "wrong-value":
+        # never how far off: the size of the error would give a scalar answer away
+        return wrong_value("wrong value: not within 0.5 % (or 0.001) of the answer for your "
+                           "numbers")
+    return why
 
 
 # --------------------------------------------------------------------------------------------

@@ -132,3 +132,22 @@ def test_one_result_cap_per_name_reveals_no_case():
 def test_result_cap_follows_the_expected_answer():
     small, big = result_cap(1.0), result_cap(np.zeros(10_000))
     assert big - small >= 4 * 80_000 and small >= 16 * 1024
+
+
+def test_a_wrong_number_item_never_says_how_far_off():
+    """The size of the error would give a one-number answer away (issue 11)."""
+    from autograder.exercises import REGISTRY
+    from autograder.judging import judge_value
+    from autograder.model import CaseOutcome, OutcomeKind, Verdict
+
+    ex = REGISTRY["q2c_your_length"]
+    right = ex.value_for("ab123")
+    for received in (right * 1.2, [right * 1.2], (right + 7.0,)):
+        verdict, why = judge_value(ex, CaseOutcome(0, OutcomeKind.RETURNED, value=received),
+                                   "ab123")
+        assert verdict in (Verdict.WRONG_VALUE, Verdict.WRONG_SHAPE)
+        assert str(round(right, 1)) not in why and "error" not in why, why
+    ok, _ = judge_value(ex, CaseOutcome(0, OutcomeKind.RETURNED, value=right * 1.004), "ab123")
+    assert ok is Verdict.PASS                  # within the stated 0.5 %
+    off, _ = judge_value(ex, CaseOutcome(0, OutcomeKind.RETURNED, value=right * 1.01), "ab123")
+    assert off is Verdict.WRONG_VALUE
