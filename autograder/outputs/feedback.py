@@ -107,7 +107,8 @@ def _cell_html(r: CellResult, reveal: bool) -> str:
     if r.kind is CellKind.FUNCTION and r.cases:
         parts += _visible_html([c for c in r.cases if c.visible])
         parts += _hidden_html([c for c in r.cases if not c.visible], reveal)
-    elif r.kind in (CellKind.CHOICE, CellKind.VALUE) and reveal and r.cases and r.cases[0].verdict is not Verdict.PASS:
+    elif (r.kind in (CellKind.CHOICE, CellKind.VALUE) and reveal and r.cases
+          and r.cases[0].verdict is not Verdict.PASS):
         parts.append("<p class='note'>See the model answer in the released solutions.</p>")
     return "\n".join(parts + _outputs(r))
 

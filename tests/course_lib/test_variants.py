@@ -78,14 +78,14 @@ def test_my_variant_prints_whose_numbers(no_id, capsys):
 def test_before_the_id_is_typed_every_use_says_what_to_do(no_id):
     mine = my_variant("q5_phong", quiet=True, missing_ok=True)
     with pytest.raises(ValueError, match="STUDENT_ID"):
-        mine.N
+        _ = mine.N
     with pytest.raises(ValueError, match="STUDENT_ID"):
         mine.options("x", ["a", "b"])
 
 
 def test_an_unknown_number_name_lists_the_known_ones():
     with pytest.raises(AttributeError, match="thicknesses"):
-        variant("q1_imaging", "ab123").speed
+        _ = variant("q1_imaging", "ab123").speed
 
 
 def test_option_order_is_a_permutation_and_letters_round_trip():

@@ -53,7 +53,7 @@ import numpy as np
 import pytest
 from gradingtools import (expect_all, expect_full_marks, points_of,
                           SECRET, append_cell, cases_of, cell_index, course_sources,
-                          model_version, read_grades, run_grade, target_of, write_nb)
+                          model_version, read_grades, run_grade, set_cell, target_of, write_nb)
 
 from autograder.exercises import REGISTRY
 
@@ -880,10 +880,14 @@ SLOW = "import time\n_slow_{0} = {0}\ndef {0}(*args, **kwargs):\n    time.sleep(
 HOLD_JOB_TIMEOUT = 15
 
 
-def _phong_with(edits: dict) -> dict:
+def _phong_with(edits: dict, student: str) -> dict:
+    """The model q5 notebook with ``edits`` appended, its number item typed as a literal (so
+    loading the cells calls no graded function: only the cases do)."""
     nb = model_version(SOURCES["q5_phong"])
     for name, code in edits.items():
         append_cell(nb, name, code)
+    answer = REGISTRY["q5b_your_intensity"].value_for(student).tolist()
+    set_cell(nb, "q5b_your_intensity", f"q5b_your_intensity = {answer!r}\n")
     return nb
 
 
@@ -894,10 +898,11 @@ def hold(tmp_path_factory):
         pytest.skip("q5_phong is not in the course")
     root = tmp_path_factory.mktemp("hold")
     sub = root / "submitted"
-    nbs = {"rt_cap_oracle": _phong_with({"normalize": CAP_ORACLE}),
-           "rt_extend": _phong_with({"normalize": EXTEND}),
+    nbs = {"rt_cap_oracle": _phong_with({"normalize": CAP_ORACLE}, "rt_cap_oracle"),
+           "rt_extend": _phong_with({"normalize": EXTEND}, "rt_extend"),
            "rt_slow": _phong_with({n: SLOW.format(n) for n in
-                                   ("normalize", "reflect", "phong", "halfway", "blinn_phong")}),
+                                   ("normalize", "reflect", "phong", "halfway", "blinn_phong")},
+                                  "rt_slow"),
            "zz_victim": model_version(src)}
     for student, nb in nbs.items():
         write_nb(sub / student / "tripos2006" / "q5_phong.ipynb", nb)

@@ -28,7 +28,7 @@ import pytest
 from gradingtools import (expect_all, expect_full_marks, points_of,
                           CASE_TIMEOUT, SECRET, append_cell, cases_of, cell_index,
                           course_sources, model_version, read_grades, release_version,
-                          run_grade, set_cell, target_of, write_nb)
+                          run_grade, set_cell, solution_code, target_of, write_nb)
 
 from autograder.exercises import REGISTRY
 
@@ -515,7 +515,9 @@ def honest_notebook(src) -> dict | None:
 
     Each top-level function named after a graded name goes into that name's solution cell; the
     other top-level statements (imports, helpers) go into the first solution cell; choice
-    answers come from the registry's answer (they are the exam's facts, not code).
+    answers are the registry's key in the honest student's own order of the options (the
+    letters they would read off their notebook), and number items are worked as the model
+    answer works them, with the honest student's own functions on their own numbers.
     """
     import ast
 
@@ -534,6 +536,7 @@ def honest_notebook(src) -> dict | None:
                                                            ast.Constant)):
             shared.append(segment)
     nb = release_version(src)
+    model = model_version(src)
     first = True
     for cell in nb["cells"]:
         meta = cell.get("metadata", {}).get("nbgrader", {})
@@ -546,8 +549,9 @@ def honest_notebook(src) -> dict | None:
         if gid in defs:
             parts.append(defs[gid])
         elif ex is not None and ex.kind == "choice":
-            answer = ex.answer if isinstance(ex.answer, str) else "".join(sorted(ex.answer))
-            parts.append(f"{gid} = {answer!r}")
+            parts.append(f"{gid} = {ex.key_for('honest')!r}")
+        elif ex is not None and ex.kind == "value":
+            parts.append(solution_code(model, gid))
         else:
             continue
         cell["source"] = "\n\n".join(parts) + "\n"
