@@ -230,6 +230,15 @@ def unanswered_or_broken(name: str, kind: CellKind, hint: AnswerHint, defined: b
     return None
 
 
+def not_typed(name: str, kind: CellKind) -> str:
+    """The message for a choice or number item whose cell computes its answer (issue 11)."""
+    example = "\"b\"" if kind is CellKind.CHOICE else "[1.25, 0.5, 3.0]"
+    return (f"not typed: the cell of {name} must set {name} to your answer typed out as a "
+            f"literal, e.g. {name} = {example}. Items are graded on what you type, not on "
+            "what code computes: work it out in another cell if you like, then type the result "
+            "here and resubmit")
+
+
 def _how_to_answer(name: str, kind: CellKind) -> str:
     if kind is CellKind.FUNCTION:
         return f"define it with def {name}(...)"

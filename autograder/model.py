@@ -187,6 +187,9 @@ class CellResult:
     seconds: float = 0.0
     code: str = ""                  #: the student's graded cell (or written answer)
     whole_notebook: bool = False    #: the status concerns the whole notebook (missing, unreadable)
+    #: another student whose numbers or option letters this wrong answer fits (instructors' report;
+    #: the student's feedback says so only once hidden tests are revealed)
+    fits_other: str = ""
 
 
 class AnswerShape(str, enum.Enum):

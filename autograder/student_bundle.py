@@ -342,13 +342,19 @@ cd tripos2006          # the folder of notebooks you were given
 ~/4f9-env/bin/jupyter lab
 ```
 
-Open a notebook and run its first cell. Fill in every cell marked `YOUR CODE HERE` (remove the
-`raise NotImplementedError()`), run the test cell under it, and write your explanations where
-it says `YOUR ANSWER HERE`. The **Validate** button in the notebook toolbar runs every cell of
-the notebook, as the grader will, and tells you which tests still fail.
+Open a notebook, run its setup cell, then type your student id once in the `STUDENT_ID` cell
+just below it (`STUDENT_ID = "ab123"`) and run that: it prints **your numbers**, the ones the
+items headed *Your numbers* ask about, and every multiple-choice item then shows its options in
+an order of your own. (On the course's JupyterHub your login is used and the cell changes
+nothing.) Fill in every cell marked `YOUR CODE HERE` (remove the `raise NotImplementedError()`),
+run the test cell under it, and write your explanations where it says `YOUR ANSWER HERE`. The
+**Validate** button in the notebook toolbar runs the notebook's visible tests and tells you which
+still fail; they check the form of each answer, and the hidden tests of the grader check more.
 
-- Each graded function must work on its own: the grader runs your notebook's first cell and
-  your answer cells, nothing else.
+- Each graded function must work on its own: the grader runs the notebook's setup cell and your
+  answer cells, nothing else (not the `STUDENT_ID` cell: it knows who you are).
+- Type the answers to items (letters, numbers, lists of numbers): the grader reads what an item's
+  answer cell types, not what code computes.
 - Do not call `course_lib` from a graded function: the library is there for the figures and
   explorers, and an answer that calls it scores nothing. Its help (`?` after a name) describes
   what each function does; its code is not part of the package.

@@ -11,12 +11,13 @@ Who the student is (:func:`student_id`), first match wins:
 1. ``JUPYTERHUB_USER``: on the course's JupyterHub, the login name;
 2. nbgrader's configured student id (``c.CourseDirectory.student_id = "..."`` in an
    ``nbgrader_config.py`` of the working folder or of ``~/.jupyter``);
-3. what the student typed in the notebook's first cell (``STUDENT_ID = "..."``).
+3. what the student typed in the notebook's ``STUDENT_ID`` cell (just below the setup cell).
 
 The grader always uses the id of the submission's folder, so a notebook that worked another
 student's numbers earns nothing for those items (its feedback says whose numbers they were).
 
-The numbers are drawn from SHA-256 of ``"tripos2006|<student>|<notebook>|<label>"``, in pure
+The numbers are drawn from SHA-256 of ``"tripos2006|<student>|<notebook>|<label>"`` (the id in
+lower case: ``AB123`` and ``ab123`` are one student), in pure
 Python (no NumPy random stream, whose algorithms may change between releases), and from small
 grids of round values, so they can be worked by hand.
 
@@ -50,13 +51,17 @@ LETTERS = "abcdefgh"
 # who is working
 
 
+#: A student id, as the grader accepts a submission folder's name.
+_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9._@+-]{0,127}")
+
+
 def _clean_id(value, source: str) -> str:
     text = str(value).strip()
     if not text:
         return ""
-    if len(text) > 100 or not re.fullmatch(r"[A-Za-z0-9._@+-]+", text):
-        raise ValueError(f"student id {text!r} from {source} is not a plain id (letters, digits "
-                         "and . _ @ + - only, at most 100 characters)")
+    if not _ID.fullmatch(text):
+        raise ValueError(f"student id {text!r} from {source} is not a plain id (a letter or "
+                         "digit, then letters, digits and . _ @ + -, at most 128 characters)")
     return text
 
 
@@ -82,18 +87,19 @@ def nbgrader_student_id(folders=None) -> str:
 
 def student_id(typed: str = "") -> str:
     """The id of the student working: ``JUPYTERHUB_USER``, else nbgrader's configured id, else
-    ``typed`` (the notebook's first cell). ``ValueError`` when none is known or it is malformed."""
+    ``typed`` (the notebook's ``STUDENT_ID`` cell). ``ValueError`` when none is known or it is
+    malformed."""
     hub = _clean_id(os.environ.get("JUPYTERHUB_USER", ""), "JUPYTERHUB_USER")
     if hub:
         return hub
     configured = nbgrader_student_id()
     if configured:
         return configured
-    own = _clean_id(typed or "", "the first cell (STUDENT_ID)")
+    own = _clean_id(typed or "", "STUDENT_ID")
     if own:
         return own
     raise ValueError("no student id: type yours between the quotes of STUDENT_ID = \"\" in the "
-                     "notebook's first cell and run it, then run this cell again (on the "
+                     "notebook's STUDENT_ID cell (just below the setup cell) and run it (on the "
                      "course's JupyterHub this is done for you)")
 
 
@@ -102,10 +108,11 @@ def student_id(typed: str = "") -> str:
 
 
 class _Draw:
-    """Choices made from SHA-256 of (assignment, student, notebook, label, counter)."""
+    """Choices made from SHA-256 of (assignment, student, notebook, label, counter); the id is
+    taken in lower case (JupyterHub lower-cases logins, so ``AB123`` typed offline is ``ab123``)."""
 
     def __init__(self, student: str, notebook: str):
-        self._prefix = f"{ASSIGNMENT}|{student}|{notebook}|"
+        self._prefix = f"{ASSIGNMENT}|{student.lower()}|{notebook}|"
         self._counter = 0
 
     def unit(self, label: str) -> float:

@@ -131,11 +131,24 @@ NUMBER_RTOL, NUMBER_ATOL = 5e-3, 1e-3
 
 
 def number_item(name: str, notebook: str, solve: Callable[[Any], Any],
-                description: str) -> Exercise:
+                description: str, compare: Callable | None = None) -> Exercise:
     """A number item worked on the student's own numbers: ``solve(variant)`` gives the answer
-    with the course's references; answers within 0.5 % (or 0.001) of it pass."""
+    with the course's references; by default (:func:`numbers_close`) answers within 0.5 % (or
+    0.001) of it pass."""
     return Exercise(name=name, notebook=notebook, kind="value", solve=solve,
-                    compare=numbers_close, description=description)
+                    compare=compare or numbers_close, description=description)
+
+
+def same_integer(expected, received) -> Mismatch | None:
+    """A whole number, exactly (a case number 200 is not 201, however close): ``int``, a NumPy
+    integer or a float/0-d array holding a whole number."""
+    if isinstance(received, np.ndarray) and received.shape == ():
+        received = received.item()
+    if isinstance(received, bool) or not isinstance(received, (int, float)):
+        return wrong_shape(f"wrong type (expected one whole number, got {describe(received)})")
+    if isinstance(received, float) and not (math.isfinite(received) and received.is_integer()):
+        return wrong_value("wrong value: not a whole number")
+    return None if int(received) == int(expected) else wrong_value("wrong value")
 
 
 def numbers_close(expected, received) -> Mismatch | None:

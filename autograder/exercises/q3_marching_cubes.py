@@ -26,7 +26,8 @@ import numpy as np
 from course_lib import marching_cubes as mc
 from course_lib import mesh
 
-from .base import Case, Exercise, Mismatch, close, describe, wrong_shape, number_item
+from .base import (Case, Exercise, Mismatch, close, describe, number_item, same_integer,
+                   wrong_shape)
 
 NB = "q3_marching_cubes"
 
@@ -414,5 +415,6 @@ EXERCISES += [
                 "Q3(a) on your numbers: where the vertex lies on your crossed edge"),
     number_item("q3a_your_case", NB,
                 lambda v: int(mc.cube_index(np.array(v.corner_values), v.iso)),
-                "Q3(a) on your numbers: the case number (0-255) of your cell"),
+                "Q3(a) on your numbers: the case number (0-255) of your cell",
+                compare=same_integer),
 ]

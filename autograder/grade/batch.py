@@ -14,7 +14,7 @@ from __future__ import annotations
 import sys
 import traceback
 from concurrent.futures import ThreadPoolExecutor, as_completed
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .. import judging
@@ -22,10 +22,11 @@ from ..course import TEXT_STUB
 from ..exercises import REGISTRY
 from ..isolation import CaseInput, Limits, Mode, NameJob, NotebookJob, run_notebook
 from ..isolation.jobs import CHOICE, FUNCTION
-from ..model import (ASSIGNMENT, AnswerHint, Batch, CaseRecord, CellKind, CellResult, NameRun,
+from ..model import (ASSIGNMENT, AnswerHint, AnswerShape, Batch, CaseOutcome, CaseRecord, CellKind,
+                     CellResult, NameRun, OutcomeKind,
                      SourceNotebook, Status, Submission, Verdict)
 from .cases import DrawnCase, case_seed, draw, notebook_digest
-from .planning import MAX_CELL_CODE, CellPlan, answer_hint, plan_cells
+from .planning import MAX_CELL_CODE, NOT_TYPED, CellPlan, answer_hint, plan_cells, typed_answer
 from .progress import Progress
 from .reading import MAX_NOTEBOOK_MB, discover_students, read_submission
 from .whose import other_students
@@ -198,9 +199,10 @@ def grade_notebook(work: NotebookWork, opts: Options) -> list[CellResult]:
         runs = run_notebook(job, opts.limits, opts.mode)
         held_hidden = any(not d.case.visible for _job, drawn, _hint in prepared.values()
                           for d in drawn)
+        others = other_students(work.sub)
         return [judge_name(work, name, test_id, points, prepared[name][1], prepared[name][2],
                            runs.get(name), opts.reveal_hidden,
-                           show_output=opts.reveal_hidden or not held_hidden)
+                           show_output=opts.reveal_hidden or not held_hidden, others=others)
                 for name, test_id, points in work.names]
     except Exception as exc:  # noqa: BLE001 - one broken notebook never stops the batch
         traceback.print_exc()
@@ -232,7 +234,7 @@ def _prepare_name(work: NotebookWork, name: str,
 
 def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
                drawn: list[DrawnCase], hint: AnswerHint, run: NameRun | None,
-               reveal: bool, show_output: bool = True) -> CellResult:
+               reveal: bool, show_output: bool = True, others=()) -> CellResult:
     """The :class:`CellResult` of one graded name from what its run returned.
 
     ``show_output`` False (a job that held hidden inputs, before the deadline): nothing the
@@ -245,9 +247,16 @@ def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
         return CellResult(work.student, work.src.name, test_id, name, 0.0, points,
                           Status.GRADER_ERROR, "the sandbox returned nothing for this test; "
                           "the instructor will look into it", kind=kind, code=code)
+    typed = NOT_TYPED
+    if kind is not CellKind.FUNCTION:
+        typed = typed_answer(work.plan.python.get(work.plan.chosen[name], ""), name)
+        if typed is not NOT_TYPED:      # judged on what the cell types, not on what ran
+            run = replace(run, outcomes=[CaseOutcome(0, OutcomeKind.RETURNED, value=typed)])
     records = _records(ex, kind, drawn, run, show_output, work.student)
     load_notes = _load_notes(run, show_output)
     score, status, message = judging.summarise(records, points, kind)
+    if kind is not CellKind.FUNCTION and typed is NOT_TYPED and hint.shape is AnswerShape.WRITTEN:
+        score, status, message = 0.0, Status.FAILED, judging.not_typed(name, kind)
     if hint.reference and kind is CellKind.FUNCTION:
         score, status, message = 0.0, *judging.reference_imported(name, hint.reference)
     elif score == 0 and status is not Status.REFERENCE_USED:
@@ -256,15 +265,17 @@ def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
         if override is not None:
             status, message = override
     notes = list(work.plan.notes.get(name, []))
-    if kind in (CellKind.CHOICE, CellKind.VALUE) and status is not Status.OK:
-        notes += _other_numbers(ex, run, work.sub)
+    fits = _fits_other(ex, run, others) if kind in (CellKind.CHOICE, CellKind.VALUE) and \
+        status is not Status.OK else ""
+    if fits and reveal:
+        notes.append(_fits_note(ex, fits, work.student))
     if notes:
         message += ". Note: " + "; ".join(notes)
     printed = _printed(run, records, reveal) if show_output else _hidden_printed(run, records)
     return CellResult(work.student, work.src.name, test_id, name, score, points, status,
                       message, kind=kind, cases=[_kept(r, reveal) for r in records],
                       printed=printed, notes=notes + load_notes,
-                      seconds=run.seconds, code=code)
+                      seconds=run.seconds, code=code, fits_other=fits)
 
 
 #: What stands for the student's own text while hidden tests are not revealed.
@@ -284,19 +295,23 @@ def _hidden_printed(run: NameRun, records: list[CaseRecord]) -> str:
     return f"(what your code printed is {HIDDEN_OUTPUT})" if printed else ""
 
 
-def _other_numbers(ex, run: NameRun, sub) -> list[str]:
-    """A note when a wrong item fits the numbers of another student the notebook names."""
-    for other in other_students(sub):
+def _fits_other(ex, run: NameRun, others) -> str:
+    """The first of ``others`` (ids the notebook names) whose numbers or letters this wrong
+    answer fits, else ``""``."""
+    for other in others:
         try:
             verdict, _ = judging.judge_item(ex, run.outcomes[0], other)
         except Exception:  # noqa: BLE001 - a note only; never fail the grading over it
             continue
         if verdict is Verdict.PASS:
-            what = "option letters" if ex.kind == "choice" else "numbers"
-            return [f"this answer fits the {what} of student {other}, not yours "
-                    f"({sub.student}): every student answers on their own {what}, and "
-                    "the grade uses yours"]
-    return []
+            return other
+    return ""
+
+
+def _fits_note(ex, other: str, student: str) -> str:
+    what = "option letters" if ex.kind == "choice" else "numbers"
+    return (f"this answer fits the {what} of student {other}, not yours ({student}): every "
+            f"student answers on their own {what}, and the grade uses yours")
 
 
 def _records(ex, kind: CellKind, drawn: list[DrawnCase], run: NameRun,

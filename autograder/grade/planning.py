@@ -91,6 +91,39 @@ def _bindings(code: str, name: str) -> list[ast.stmt] | None:
     return found
 
 
+#: What :func:`typed_answer` returns when the cell does not type its answer as a literal.
+NOT_TYPED = object()
+
+
+def typed_answer(code: str, name: str):
+    """The answer a choice or number item's cell *types*: the literal of its last top-level
+    ``name = <literal>`` (a string, a number, ``True``/``False``, or lists and tuples of them;
+    lists become tuples), else :data:`NOT_TYPED`.
+
+    Items are judged on what the student typed, never on what code computes (issue 11): a
+    notebook whose cells compute the answer from ``mine`` would hand every friend who copies it
+    their own right answers.
+    """
+    found = _bindings(code, name)
+    if not found or not isinstance(found[-1], (ast.Assign, ast.AnnAssign)) \
+            or found[-1].value is None:
+        return NOT_TYPED
+    try:
+        value = ast.literal_eval(found[-1].value)
+    except PARSE_ERRORS + (TypeError,):
+        return NOT_TYPED
+    return _plain_literal(value)
+
+
+def _plain_literal(value, depth: int = 0):
+    if value is None or type(value) in (bool, int, float, str):
+        return value
+    if type(value) in (list, tuple) and depth < 3:
+        items = tuple(_plain_literal(v, depth + 1) for v in value)
+        return NOT_TYPED if any(v is NOT_TYPED for v in items) else items
+    return NOT_TYPED
+
+
 def defines(code: str, name: str) -> bool:
     """Whether ``code`` defines ``name`` at top level (``def name`` or ``name = ...``)."""
     found = _bindings(code, name)

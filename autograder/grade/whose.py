@@ -1,9 +1,14 @@
 """Whose numbers a submitted notebook worked (issue 11).
 
 The grader always judges number items and option letters for the student of the submission's
-folder. When the notebook shows it worked another id's numbers (its first cell typed another
-``STUDENT_ID``, or its saved output of the setup cell says "Your numbers (student X)"), the
-feedback says so, and says which of the wrong answers fit that other student's numbers.
+folder. When the notebook shows it worked another id's numbers (a ``STUDENT_ID`` typed in a code
+cell, or a saved output "Your numbers (student X)"), the grader checks whether each wrong item
+fits one of those ids. That goes to the instructors' report at once, and into the student's
+feedback only once hidden tests are revealed (after the deadline): before it, a note naming ids
+of the student's own choosing would be an oracle for the option keys (red-team finding F1).
+
+The scan is bounded (a few ids, the first outputs of each cell, the start of each text) and
+runs once per submission, so a notebook full of made-up ids costs nothing (finding F2).
 """
 
 from __future__ import annotations
@@ -12,43 +17,49 @@ import re
 
 from ..model import Submission
 
-_PRINTED = re.compile(r"Your numbers \(student ([A-Za-z0-9._@+-]{1,100})\)")
-_TYPED = re.compile(r"""^\s*STUDENT_ID\s*=\s*["']([A-Za-z0-9._@+-]{1,100})["']""", re.MULTILINE)
-#: Characters of one saved output the search reads (a header is near the start).
+_ID = r"([A-Za-z0-9][A-Za-z0-9._@+-]{0,127})"
+_PRINTED = re.compile(r"Your numbers \(student " + _ID + r"\)")
+_TYPED = re.compile(r"""^\s*STUDENT_ID\s*=\s*["']""" + _ID + """["']""", re.MULTILINE)
+#: Characters of one cell's source or one saved output the search reads (a header is near the start).
 SCAN_CHARS = 4000
-
-
-def declared_students(sub: Submission) -> list[str]:
-    """The ids a submitted notebook says it worked for, in notebook order, without repeats."""
-    found: list[str] = []
-    for cell in sub.cells:
-        if cell.get("cell_type") != "code":
-            continue
-        texts = [cell.get("source", "")] + _output_texts(cell.get("raw") or {})
-        for text in texts:
-            for rx in (_TYPED, _PRINTED):
-                for match in rx.finditer(text[:SCAN_CHARS]):
-                    if match.group(1) not in found:
-                        found.append(match.group(1))
-    return found
+#: Saved outputs read per code cell.
+SCAN_OUTPUTS = 8
+#: Ids other than the folder's own that are checked at most.
+MAX_OTHERS = 3
 
 
 def other_students(sub: Submission) -> list[str]:
-    """The ids other than the submission's own that its notebook says it worked for."""
-    return [s for s in declared_students(sub) if s != sub.student][:3]
+    """Up to :data:`MAX_OTHERS` ids other than the folder's own that the notebook names, in
+    notebook order (case as written)."""
+    own = sub.student.lower()
+    found: list[str] = []
+    seen = {own}
+    for cell in sub.cells:
+        if cell.get("cell_type") != "code":
+            continue
+        for text in [cell.get("source", "")] + _output_texts(cell.get("raw") or {}):
+            for rx in (_TYPED, _PRINTED):
+                for match in rx.finditer(text[:SCAN_CHARS]):
+                    sid = match.group(1)
+                    if sid.lower() not in seen:
+                        seen.add(sid.lower())
+                        found.append(sid)
+                        if len(found) >= MAX_OTHERS:
+                            return found
+    return found
 
 
 def _output_texts(raw: dict) -> list[str]:
     texts = []
     outputs = raw.get("outputs") if isinstance(raw, dict) else None
-    for out in outputs if isinstance(outputs, list) else []:
+    for out in (outputs if isinstance(outputs, list) else [])[:SCAN_OUTPUTS]:
         if not isinstance(out, dict):
             continue
         text = out.get("text")
         if text is None and isinstance(out.get("data"), dict):
             text = out["data"].get("text/plain")
         if isinstance(text, list):
-            text = "".join(t for t in text if isinstance(t, str))
+            text = "".join(t for t in text[:200] if isinstance(t, str))
         if isinstance(text, str):
-            texts.append(text)
+            texts.append(text[:SCAN_CHARS])
     return texts

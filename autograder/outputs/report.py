@@ -1,7 +1,8 @@
 """``OUT/report.html``: what an instructor wants after a grading run, on one page.
 
 The score distribution per question (inline SVG histograms), the most-failed tests (by how many
-students lost points, and how), the submissions that could not be graded at all, and a count of
+students lost points, and how), the submissions that could not be graded at all, similar
+solutions, answers that fit another student's own numbers (:mod:`.variants`), and a count of
 every status with its meaning. Unanswered cells count as lost points with their own status,
 never as grader failures.
 """
@@ -15,6 +16,7 @@ from pathlib import Path
 from ..model import STATUS_MEANING, CellKind, CellResult, SourceNotebook, Status
 from .html import e, page, write_page
 from .similarity import find_pasted_references, find_similar, render_section
+from .variants import section_html as own_numbers_html
 
 _STYLE = """
 .grid{display:flex;flex-wrap:wrap;gap:1.2em}.card{border:1px solid #ddd;padding:.6em;
@@ -103,7 +105,8 @@ def render(results: list[CellResult], sources: list[SourceNotebook],
             "Written answers are marked in formgrader and are not included here.</p>"]
     body += _distributions(results, sources) + _most_failed_html(results)
     body += _grader_errors_html(results) + _ungradeable_html(results)
-    body += [similar_solutions_html(results, references, jobs)] + _statuses_html(results)
+    body += [similar_solutions_html(results, references, jobs), own_numbers_html(results)]
+    body += _statuses_html(results)
     return page("tripos2006: grading report", body, _STYLE)
 
 

@@ -153,3 +153,12 @@ def test_the_module_needs_only_the_standard_library():
     top = {a.name.split(".")[0] for n in tree.body if isinstance(n, ast.Import) for a in n.names}
     top |= {n.module.split(".")[0] for n in tree.body if isinstance(n, ast.ImportFrom)}
     assert top <= {"__future__", "hashlib", "os", "re", "dataclasses", "pathlib"}, top
+
+
+def test_ids_are_case_insensitive_and_as_long_as_the_grader_takes():
+    """Red-team F8: JupyterHub lower-cases logins; the grader takes folder ids of 128 characters."""
+    assert variant("q5_phong", "AB123").numbers == variant("q5_phong", "ab123").numbers
+    assert option_order("item", 4, "AB123") == option_order("item", 4, "ab123")
+    variant("q5_phong", "a" * 128)
+    with pytest.raises(ValueError):
+        variant("q5_phong", "a" * 129)

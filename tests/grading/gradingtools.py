@@ -179,8 +179,27 @@ def cases_of(student: str, name: str, nb, secret: bytes = SECRET):
     return ex.draw_cases(np.random.default_rng(seed))
 
 
-def write_nb(path: Path, nb) -> None:
+def typed_version(nb: dict, student: str) -> dict:
+    """``nb`` with every choice and number item that the model answer *computes* from ``mine``
+    typed out as a literal for ``student``: what a student hands in (the grader reads typed
+    answers only, issue 11). Cells of any other form are left as they are."""
+    for cell in nb["cells"]:
+        ex = REGISTRY.get(_meta(cell).get("grade_id", ""))
+        if ex is None or ex.kind not in ("choice", "value") or "mine." not in _src_text(cell):
+            continue
+        answer = ex.key_for(student) if ex.kind == "choice" else ex.value_for(student)
+        answer = answer.tolist() if isinstance(answer, np.ndarray) else answer
+        cell["source"] = f"{ex.name} = {answer!r}\n"
+    return nb
+
+
+def write_nb(path: Path, nb, type_answers: bool = True) -> None:
+    """Write a submission; a notebook (dict) under ``<student>/tripos2006/`` gets its computed
+    item answers typed for that student (:func:`typed_version`) unless ``type_answers`` is
+    False."""
     path.parent.mkdir(parents=True, exist_ok=True)
+    if isinstance(nb, dict) and type_answers and path.parent.name == "tripos2006":
+        nb = typed_version(copy.deepcopy(nb), path.parent.parent.name)
     if isinstance(nb, bytes):
         path.write_bytes(nb)
     elif isinstance(nb, str):

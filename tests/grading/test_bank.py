@@ -28,7 +28,7 @@ import pytest
 from gradingtools import (expect_all, expect_full_marks, points_of,
                           CASE_TIMEOUT, SECRET, append_cell, cases_of, cell_index,
                           course_sources, model_version, read_grades, release_version,
-                          run_grade, set_cell, solution_code, target_of, write_nb)
+                          run_grade, set_cell, target_of, write_nb)
 
 from autograder.exercises import REGISTRY
 
@@ -516,8 +516,8 @@ def honest_notebook(src) -> dict | None:
     Each top-level function named after a graded name goes into that name's solution cell; the
     other top-level statements (imports, helpers) go into the first solution cell; choice
     answers are the registry's key in the honest student's own order of the options (the
-    letters they would read off their notebook), and number items are worked as the model
-    answer works them, with the honest student's own functions on their own numbers.
+    letters they would read off their notebook), and number items are typed as the values for
+    the honest student's own numbers (what they would get by hand).
     """
     import ast
 
@@ -536,7 +536,6 @@ def honest_notebook(src) -> dict | None:
                                                            ast.Constant)):
             shared.append(segment)
     nb = release_version(src)
-    model = model_version(src)
     first = True
     for cell in nb["cells"]:
         meta = cell.get("metadata", {}).get("nbgrader", {})
@@ -551,7 +550,9 @@ def honest_notebook(src) -> dict | None:
         elif ex is not None and ex.kind == "choice":
             parts.append(f"{gid} = {ex.key_for('honest')!r}")
         elif ex is not None and ex.kind == "value":
-            parts.append(solution_code(model, gid))
+            parts.append(f"{gid} = {ex.value_for('honest').tolist()!r}"
+                         if hasattr(ex.value_for("honest"), "tolist")
+                         else f"{gid} = {ex.value_for('honest')!r}")
         else:
             continue
         cell["source"] = "\n\n".join(parts) + "\n"

@@ -151,3 +151,19 @@ def test_a_wrong_number_item_never_says_how_far_off():
     assert ok is Verdict.PASS                  # within the stated 0.5 %
     off, _ = judge_value(ex, CaseOutcome(0, OutcomeKind.RETURNED, value=right * 1.01), "ab123")
     assert off is Verdict.WRONG_VALUE
+
+
+def test_a_case_number_item_is_exact():
+    """Red-team F6: 0.5 % of 200 is a whole case number; a case number must match exactly."""
+    from autograder.exercises import REGISTRY
+    from autograder.judging import judge_value
+    from autograder.model import CaseOutcome, OutcomeKind, Verdict
+
+    ex = REGISTRY["q3a_your_case"]
+    for sid in ("ab123", "cd456", "st0007"):
+        right = ex.value_for(sid)
+        judge = lambda v, s=sid: judge_value(ex, CaseOutcome(0, OutcomeKind.RETURNED, value=v), s)[0]  # noqa: E731
+        assert judge(right) is Verdict.PASS and judge(float(right)) is Verdict.PASS
+        assert judge(right + 1) is Verdict.WRONG_VALUE and judge(right - 1) is Verdict.WRONG_VALUE
+        assert judge(right + 0.5) is Verdict.WRONG_VALUE
+        assert judge(str(right)) is Verdict.WRONG_SHAPE and judge([right]) is Verdict.WRONG_SHAPE
