@@ -122,9 +122,10 @@ def errors_beyond_stubs(found: list[CellError]) -> list[str]:
     ]
 
 
-def option_texts(nb, name: str) -> dict[str, str]:
+def option_texts(nb, name: str, student: str = "ci-student") -> dict[str, str]:
     """``{letter: text}`` of multiple-choice item ``name`` in the canonical order: the list its
-    ``options_<name>`` cell hands to ``mine.options`` (each student sees them shuffled)."""
+    ``options_<name>`` cell hands to ``mine.options`` (each student sees them shuffled; options
+    written with the student's numbers are filled in with ``student``'s)."""
     import ast
 
     cell = next((c for c in nb.cells if nbgrader_meta(c).get("grade_id") == f"options_{name}"),
@@ -132,5 +133,12 @@ def option_texts(nb, name: str) -> dict[str, str]:
     if cell is None:
         return {}
     call = ast.parse(cell.source).body[0].value
-    texts = ast.literal_eval(call.args[1])
+    try:
+        texts = ast.literal_eval(call.args[1])
+    except ValueError:       # options that use the student's numbers (f-strings over ``mine``)
+        from autograder.exercises import REGISTRY
+        from course_lib.variants import variant
+
+        mine = variant(REGISTRY[name].notebook, student)
+        texts = eval(compile(ast.Expression(call.args[1]), "<options>", "eval"), {"mine": mine})
     return dict(zip("abcdefgh", texts))
