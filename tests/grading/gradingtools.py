@@ -183,9 +183,15 @@ def typed_version(nb: dict, student: str) -> dict:
     """``nb`` with every choice and number item that the model answer *computes* from ``mine``
     typed out as a literal for ``student``: what a student hands in (the grader reads typed
     answers only, issue 11). Cells of any other form are left as they are."""
-    for cell in nb["cells"]:
-        ex = REGISTRY.get(_meta(cell).get("grade_id", ""))
-        if ex is None or ex.kind not in ("choice", "value") or "mine." not in _src_text(cell):
+    cells = nb.get("cells") if isinstance(nb, dict) else None
+    for cell in cells if isinstance(cells, list) else []:     # adversaries send odd notebooks
+        try:
+            ex = REGISTRY.get(_meta(cell).get("grade_id", ""))
+            computed = ex is not None and ex.kind in ("choice", "value") \
+                and "mine." in _src_text(cell)
+        except (AttributeError, TypeError):
+            continue
+        if not computed:
             continue
         answer = ex.key_for(student) if ex.kind == "choice" else ex.value_for(student)
         answer = answer.tolist() if isinstance(answer, np.ndarray) else answer
