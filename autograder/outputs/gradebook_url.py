@@ -1,9 +1,9 @@
 """The gradebook's database URL, checked before any grading starts.
 
 nbgrader opens its gradebook through SQLAlchemy, which picks a database driver from the URL.
-A plain ``postgresql://`` means SQLAlchemy's default driver, psycopg2; the course installs
-psycopg 3 instead (the ``postgres`` extra), so :func:`resolve_db_url` names it
-(``postgresql+psycopg://``) whenever psycopg2 is absent. A URL whose driver cannot be imported
+A plain ``postgresql://`` means SQLAlchemy's default driver (psycopg2 up to SQLAlchemy 2.0,
+psycopg 3 from 2.1); the course installs psycopg 3 (the ``postgres`` extra), so
+:func:`resolve_db_url` names it (``postgresql+psycopg://``) whenever it is installed. A URL whose driver cannot be imported
 raises :class:`MissingDriver` naming the package to install, so ``grade --db-url`` stops with
 an error at once instead of grading for an hour and then leaving the gradebook untouched.
 """
@@ -41,8 +41,8 @@ def resolve_db_url(db_url: str) -> str:
     Returns
     -------
     str
-        The same URL, with ``postgresql://`` made ``postgresql+psycopg://`` when psycopg2 is
-        missing and psycopg 3 is installed; any other URL unchanged.
+        The same URL, with ``postgresql://`` made ``postgresql+psycopg://`` when psycopg 3 is
+        installed; any other URL unchanged.
 
     Raises
     ------
@@ -58,8 +58,7 @@ def resolve_db_url(db_url: str) -> str:
         raise ValueError(f"db_url must be a database URL, got {db_url!r}")
     try:
         url = make_url(db_url)
-        if url.drivername == "postgresql" and not _importable("psycopg2") \
-                and _importable("psycopg"):
+        if url.drivername == "postgresql" and _importable("psycopg"):
             url = url.set(drivername="postgresql+psycopg")
         dialect = url.get_dialect()
     except (ArgumentError, NoSuchModuleError) as exc:
