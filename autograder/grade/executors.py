@@ -108,7 +108,7 @@ class DaskExecutor:
             futures = {client.submit(run_sandboxed, job, limits, mode,
                                      key=f"autograder-{batch_id}-{i}"): i
                        for i, job in enumerate(jobs)}
-            for fut in dask_completed(list(futures)):
+            for fut in dask_completed(list(futures), loop=client.loop):
                 i = futures.pop(fut)
                 outcome = _result(fut)
                 fut.release()

@@ -24,7 +24,7 @@ from gradingtools import (SECRET, cell_index, function_names, model_version, rea
 from postgres import fresh_database
 
 A = "tripos2006"
-slow_postgres = [pytest.mark.xdist_group("postgres"), pytest.mark.slow]
+ONE_SERVER = pytest.mark.xdist_group("postgres")   #: the tests that share the graded class
 
 
 def _carol(src) -> dict:
@@ -79,8 +79,8 @@ def graded(tmp_path_factory, sources, postgres_url):
     return {"root": root, "secret": secret, "urls": urls, "runs": runs}
 
 
-@slow_postgres[0]
-@slow_postgres[1]
+@ONE_SERVER
+@pytest.mark.slow
 def test_postgres_holds_every_row_sqlite_holds(graded):
     sqlite_rows, sqlite_totals = graded["runs"]["sqlite"]["gradebook"]
     pg_rows, pg_totals = graded["runs"]["postgresql"]["gradebook"]
@@ -97,8 +97,8 @@ def test_postgres_holds_every_row_sqlite_holds(graded):
         assert pg_totals[student] == pytest.approx(total, abs=1e-9), student
 
 
-@slow_postgres[0]
-@slow_postgres[1]
+@ONE_SERVER
+@pytest.mark.slow
 def test_postgres_scores_follow_the_notebooks_points(graded, sources):
     rows, totals = graded["runs"]["postgresql"]["gradebook"]
     csv_rows = read_grades(graded["runs"]["postgresql"]["out"])
@@ -117,8 +117,8 @@ def test_postgres_scores_follow_the_notebooks_points(graded, sources):
     assert totals["carol"] < totals["alice"]
 
 
-@slow_postgres[0]
-@slow_postgres[1]
+@ONE_SERVER
+@pytest.mark.slow
 def test_regrade_on_postgres_keeps_the_markers_work(graded, sources):
     from nbgrader.api import Gradebook
 
