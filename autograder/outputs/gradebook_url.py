@@ -3,9 +3,10 @@
 nbgrader opens its gradebook through SQLAlchemy, which picks a database driver from the URL.
 A plain ``postgresql://`` means SQLAlchemy's default driver (psycopg2 up to SQLAlchemy 2.0,
 psycopg 3 from 2.1); the course installs psycopg 3 (the ``postgres`` extra), so
-:func:`resolve_db_url` names it (``postgresql+psycopg://``) whenever it is installed. A URL whose driver cannot be imported
-raises :class:`MissingDriver` naming the package to install, so ``grade --db-url`` stops with
-an error at once instead of grading for an hour and then leaving the gradebook untouched.
+:func:`resolve_db_url` names it (``postgresql+psycopg://``) whenever it is installed. A URL
+whose driver cannot be imported raises :class:`MissingDriver` naming the package to install,
+so ``grade --db-url`` stops with an error at once instead of grading for an hour and then
+leaving the gradebook untouched.
 """
 
 from __future__ import annotations
