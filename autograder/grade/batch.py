@@ -175,26 +175,28 @@ def written_answer_blank(source: str) -> bool:
 
 
 def _run_all(works: list[NotebookWork], opts: Options) -> list[CellResult]:
-    """Plan every notebook's job here, run the jobs on the batch's executor (``opts.jobs``
-    local threads, or the dask cluster at ``opts.scheduler``: :mod:`.executors`), and judge
-    each notebook as soon as its job returns."""
+    """Plan each notebook's job here as the executor asks for more (``opts.jobs`` local
+    threads, or the dask cluster at ``opts.scheduler``: :mod:`.executors`), and judge each
+    notebook as soon as its job returns; only the jobs in flight are held in memory."""
     progress = Progress(len(works), enabled=opts.progress and bool(works))
     results: list[CellResult] = []
-    planned: list[tuple[NotebookWork, dict]] = []
-    jobs: list[NotebookJob] = []
-    for work in works:
-        try:
-            job, prepared = plan_notebook(work, opts)
-        except Exception as exc:  # noqa: BLE001 - one broken notebook never stops the batch
-            results.extend(_failed_notebook(work, exc))
-            progress.update()
-            continue
-        planned.append((work, prepared))
-        jobs.append(job)
+    planned: dict[int, tuple[NotebookWork, dict]] = {}
+
+    def jobs():
+        for i, work in enumerate(works):
+            try:
+                job, prepared = plan_notebook(work, opts)
+            except Exception as exc:  # noqa: BLE001 - one broken notebook never stops the batch
+                results.extend(_failed_notebook(work, exc))
+                progress.update()
+                continue
+            planned[i] = (work, prepared)
+            yield i, job
+
     try:
         executor = make_executor(opts.jobs, opts.scheduler)
-        for i, outcome in executor.run(jobs, opts.limits, opts.mode):
-            work, prepared = planned[i]
+        for i, outcome in executor.run(jobs(), opts.limits, opts.mode):
+            work, prepared = planned.pop(i)
             results.extend(_failed_notebook(work, outcome) if isinstance(outcome, BaseException)
                            else judge_notebook(work, prepared, outcome, opts))
             progress.update()

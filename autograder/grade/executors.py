@@ -20,18 +20,26 @@ scores cannot change with the number of attempts.
 
 from __future__ import annotations
 
+import itertools
 import uuid
-from collections.abc import Iterator
-from concurrent.futures import ThreadPoolExecutor, as_completed
+from collections.abc import Iterable, Iterator
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
 from ..isolation import Limits, Mode, NotebookJob, probe, run_notebook
 from ..model import NameRun
 
 #: Seconds a client waits for the scheduler, and then for its first worker.
 CONNECT_SECONDS = 30.0
+#: Jobs handed to a cluster ahead of its workers, per worker thread (at least
+#: :data:`MIN_CLUSTER_WINDOW`): enough to keep every worker busy, few enough that the grader
+#: never holds every notebook's drawn cases and expected values at once.
+AHEAD_PER_THREAD = 4
+MIN_CLUSTER_WINDOW = 16
 
-#: What a finished job gives back: its index in the submitted list, and its runs or the
-#: exception it raised (a grader problem; the caller turns it into ``grader-error`` rows).
+#: A job to run, under the caller's key (an index of its own notebooks).
+Keyed = tuple[int, NotebookJob]
+#: What a finished job gives back: its key, and its runs or the exception it raised (a grader
+#: problem; the caller turns it into ``grader-error`` rows).
 Finished = tuple[int, "dict[str, NameRun] | BaseException"]
 
 
@@ -59,14 +67,20 @@ class ThreadExecutor:
             raise ValueError(f"jobs must be a positive int, got {jobs!r}")
         self.jobs = jobs
 
-    def run(self, jobs: list[NotebookJob], limits: Limits, mode: Mode) -> Iterator[Finished]:
-        """Yield ``(index, runs or exception)`` for every job, in the order they finish."""
+    def run(self, keyed: Iterable[Keyed], limits: Limits, mode: Mode) -> Iterator[Finished]:
+        """Yield ``(key, runs or exception)`` for every job, in the order they finish; at most
+        twice as many jobs as threads are taken from ``keyed`` before one has finished."""
+        todo = iter(keyed)
         with ThreadPoolExecutor(max_workers=self.jobs) as pool:
-            futures = {pool.submit(run_sandboxed, job, limits, mode): i
-                       for i, job in enumerate(jobs)}
-            for fut in as_completed(futures):
-                exc = fut.exception()
-                yield futures[fut], exc if exc is not None else fut.result()
+            pending = {pool.submit(run_sandboxed, job, limits, mode): key
+                       for key, job in itertools.islice(todo, 2 * self.jobs)}
+            while pending:
+                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for fut in done:
+                    exc = fut.exception()
+                    yield pending.pop(fut), exc if exc is not None else fut.result()
+                    for key, job in itertools.islice(todo, 1):
+                        pending[pool.submit(run_sandboxed, job, limits, mode)] = key
 
 
 class DaskExecutor:
@@ -98,21 +112,33 @@ class DaskExecutor:
                                      f"(start one with `dask worker {self.address}`)") from None
         return client
 
-    def run(self, jobs: list[NotebookJob], limits: Limits, mode: Mode) -> Iterator[Finished]:
-        """Yield ``(index, runs or exception)`` for every job, in the order they finish."""
+    def run(self, keyed: Iterable[Keyed], limits: Limits, mode: Mode) -> Iterator[Finished]:
+        """Yield ``(key, runs or exception)`` for every job, in the order they finish; jobs are
+        taken from ``keyed`` only as far ahead of the workers as :data:`AHEAD_PER_THREAD`."""
         from distributed import as_completed as dask_completed
 
         client = self._client()
         try:
             batch_id = uuid.uuid4().hex[:12]
-            futures = {client.submit(run_sandboxed, job, limits, mode,
-                                     key=f"autograder-{batch_id}-{i}"): i
-                       for i, job in enumerate(jobs)}
-            for fut in dask_completed(list(futures), loop=client.loop):
-                i = futures.pop(fut)
+            threads = sum(client.nthreads().values())
+            window = max(MIN_CLUSTER_WINDOW, AHEAD_PER_THREAD * threads)
+            todo, keys = iter(keyed), {}
+            finished = dask_completed(loop=client.loop)
+
+            def submit(key: int, job: NotebookJob) -> None:
+                fut = client.submit(run_sandboxed, job, limits, mode,
+                                    key=f"autograder-{batch_id}-{key}")
+                keys[fut.key] = key
+                finished.add(fut)
+
+            for key, job in itertools.islice(todo, window):
+                submit(key, job)
+            for fut in finished:
                 outcome = _result(fut)
                 fut.release()
-                yield i, outcome
+                yield keys.pop(fut.key), outcome
+                for key, job in itertools.islice(todo, 1):
+                    submit(key, job)
         finally:
             client.close()
 
