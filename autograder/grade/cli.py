@@ -49,7 +49,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="sandboxes run in parallel (default: the number of CPUs, at most 8)")
     add("--scheduler", default=None, metavar="tcp://HOST:PORT", help="run the sandboxes on the "
         "workers of this dask.distributed scheduler instead of --jobs local ones (each worker "
-        "host needs bubblewrap and the instructors' install)")
+        "host needs bubblewrap and the instructors' install; this machine needs no sandbox)")
     add("--timeout", type=float, default=10.0, help="time limit per case, in seconds (default 10)")
     add("--db-url", default=None, help="nbgrader gradebook URL (default sqlite:///<course root>/"
         "gradebook.db; postgresql://... for a shared server)")
@@ -76,7 +76,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _mode(args) -> Mode | None:
-    """The sandbox mode, or None (after saying why) when grading must not start."""
+    """The sandbox mode, or None (after saying why) when grading must not start. With
+    ``--scheduler`` the sandboxes are the workers': each worker host probes its own before
+    every job (:func:`~autograder.grade.executors.run_sandboxed`), and never runs one
+    unconfined, so this machine needs none and ``--unsafe-no-isolation`` is not honoured."""
+    if args.scheduler:
+        return Mode.ISOLATED
     try:
         return probe()
     except IsolationUnavailable as exc:

@@ -124,3 +124,23 @@ def test_a_worker_killed_mid_batch_loses_no_job(classroom, cluster):
         assert lost and any(n >= 2 for n in _times_processing(client, lost).values()), lost
         client.wait_for_workers(2, timeout=60)      # the nanny restarts the killed worker
     assert (out / "grades.csv").read_text() == classroom["csv"]
+
+
+def test_the_grading_machine_needs_no_sandbox_of_its_own(classroom, cluster, monkeypatch):
+    """Only the workers run students' code: with ``--scheduler`` the local probe is not
+    consulted (here it would refuse), and the grades are still the oracle's."""
+    import argparse
+
+    from autograder.grade import cli
+    from autograder.isolation import IsolationUnavailable
+
+    def no_local_sandbox():
+        raise IsolationUnavailable("no bubblewrap on the grading machine (test)")
+
+    monkeypatch.setattr(cli, "probe", no_local_sandbox)
+    parser = argparse.ArgumentParser()
+    cli.add_arguments(parser)
+    out = classroom["root"] / "no-local-sandbox"
+    args = parser.parse_args(_grade_command(classroom, out, cluster.scheduler_address)[4:])
+    assert cli.main(args) == 0
+    assert (out / "grades.csv").read_text() == classroom["csv"]
