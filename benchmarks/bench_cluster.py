@@ -15,7 +15,7 @@ a ratio near 1 means the cluster costs little
 over local threads (its gain is the machines it adds, which this one machine cannot show).
 The notes say whether both ``grades.csv`` are identical. Default size: 24 submissions (a few
 minutes on 2 cores); ``BENCH_CLUSTER_SUBMISSIONS=200 python -m benchmarks --only
-bench_cluster`` runs the 200 of issue 14 (about half an hour here). With ``--smoke``: 2.
+bench_cluster`` runs the 200 of issue 14 (about ten minutes here). With ``--smoke``: 2.
 """
 
 from __future__ import annotations
