@@ -11,12 +11,12 @@ PORT   ?= 8888
 # make lab: the students' own environment (their wheel only, none of this repository's sources)
 STUDENT_VENV := .venv-student
 
-.PHONY: lab instructor test test-fast bench browser-deps sandbox-deps wheel-deps clean
+.PHONY: lab instructor test test-fast bench browser-deps sandbox-deps wheel-deps postgres-deps clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+	$(BIN)/python -m pip install --quiet -e '.[test,postgres,cluster]'
 	@touch $(STAMP)
 
 ## lab: open the course in JupyterLab as a student: the released notebooks, run in
@@ -46,6 +46,16 @@ sandbox-deps:
 	  else echo "warning: not root, cannot apt-get install bubblewrap; the grader cannot isolate students' code"; fi; \
 	fi
 
+## postgres-deps: Debian's PostgreSQL server binaries, for the tests of the gradebook on PostgreSQL
+## (the tests start a throw-away server of their own; the packaged cluster is not used)
+postgres-deps:
+	@if ! ls /usr/lib/postgresql/*/bin/initdb >/dev/null 2>&1; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends postgresql >/dev/null 2>&1) \
+	      || echo "warning: could not install postgresql; the PostgreSQL gradebook tests will be skipped"; \
+	  else echo "warning: not root, cannot apt-get install postgresql; the PostgreSQL gradebook tests will be skipped"; fi; \
+	fi
+
 ## wheel-deps: a C compiler and the Python headers, to compile the students' wheel (Cython)
 wheel-deps:
 	@if ! command -v gcc >/dev/null 2>&1 || [ ! -f "$$($(BIN)/python -c 'import sysconfig; print(sysconfig.get_paths()["include"])')/Python.h" ]; then \
@@ -56,7 +66,7 @@ wheel-deps:
 	fi
 
 ## test: the whole suite (library, notebooks, grading bank, browser)
-test: $(STAMP) browser-deps sandbox-deps wheel-deps
+test: $(STAMP) browser-deps sandbox-deps wheel-deps postgres-deps
 	$(BIN)/python -m pytest -n 2 --dist loadgroup -q
 
 ## bench: benchmarks against peers measured in the same run (writes benchmarks/results.md)

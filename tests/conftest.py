@@ -8,6 +8,9 @@
 - ``course``: a session-scoped nbgrader course (``autograder.course.prepare_course``) in a
   temporary directory, assignment ``tripos2006`` released and registered in its gradebook.
   Each xdist worker gets its own; tests that write into it (autograde) use one xdist group.
+- ``postgres_url``: a throw-away PostgreSQL server for this session (``tests/postgres.py``),
+  as the SQLAlchemy URL of its ``postgres`` database; ``postgres.fresh_database`` makes an
+  empty one. Skips only when the server binaries are not installed.
 """
 
 from __future__ import annotations
@@ -46,6 +49,19 @@ def course(tmp_path_factory, source_notebooks):
     from autograder.course import prepare_course
 
     return prepare_course(tmp_path_factory.mktemp("course"), notebooks=source_notebooks)
+
+
+@pytest.fixture(scope="session")
+def postgres_url():
+    """A PostgreSQL server started for this session (and each xdist worker), removed after."""
+    from postgres import PostgresUnavailable, start_server
+
+    try:
+        server = start_server()
+    except PostgresUnavailable as exc:
+        pytest.skip(str(exc))
+    yield server.url()
+    server.stop()
 
 
 @pytest.hookimpl(trylast=True)

@@ -10,6 +10,8 @@ The stages, in the order data flows through them (each module's docstring says m
                     course secret, the student and their solution's source;
 - :mod:`.batch`     one isolated job per (student, notebook), judged by :mod:`autograder.judging`
                     as soon as it returns (only summaries are kept);
+- :mod:`.executors` where the jobs run: ``--jobs`` local threads, or a dask cluster's workers
+                    (``--scheduler``);
 - :mod:`.secret`    the course secret;  :mod:`.cli` the command line.
 
 The outputs (``grades.csv``, feedback, report, gradebook) are written by

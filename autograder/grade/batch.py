@@ -2,7 +2,8 @@
 
 For every student and source notebook :func:`grade_batch` reads the submission, plans its cells,
 and (for the graded names it has) builds one :class:`NotebookJob` whose cases are drawn per
-student (:mod:`.cases`). A pool of ``--jobs`` threads hands the jobs to the sandbox; each
+student (:mod:`.cases`). The jobs run on an executor (:mod:`.executors`): ``--jobs`` threads
+each waiting on a local sandbox, or the workers of a dask cluster (``--scheduler``); each
 returned :class:`~autograder.model.NameRun` is judged at once (:mod:`autograder.judging`) and
 only what the outputs need is kept: verdicts, reasons, small values or summaries of big ones,
 and hidden cases' details only when they are to be revealed. So the grader's memory does not
@@ -13,19 +14,18 @@ from __future__ import annotations
 
 import sys
 import traceback
-from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .. import judging
 from ..course import TEXT_STUB
 from ..exercises import REGISTRY
-from ..isolation import CaseInput, Limits, Mode, NameJob, NotebookJob, run_notebook
+from ..isolation import CaseInput, Limits, Mode, NameJob, NotebookJob
 from ..isolation.jobs import CHOICE, FUNCTION
 from ..model import (ASSIGNMENT, AnswerHint, AnswerShape, Batch, CaseOutcome, CaseRecord, CellKind,
-                     CellResult, NameRun, OutcomeKind,
-                     SourceNotebook, Status, Submission, Verdict)
+                     CellResult, NameRun, OutcomeKind, SourceNotebook, Status, Submission, Verdict)
 from .cases import DrawnCase, case_seed, draw, notebook_digest
+from .executors import make_executor
 from .planning import MAX_CELL_CODE, NOT_TYPED, CellPlan, answer_hint, plan_cells, typed_answer
 from .progress import Progress
 from .reading import MAX_NOTEBOOK_MB, discover_students, read_submission
@@ -45,6 +45,7 @@ class Options:
     secret: bytes = b""
     reveal_hidden: bool = False
     mode: Mode = Mode.ISOLATED
+    scheduler: str | None = None    #: a dask scheduler's address: run the jobs on its workers
     max_notebook_mb: float = MAX_NOTEBOOK_MB
     progress: bool = True
 
@@ -176,27 +177,48 @@ def written_answer_blank(source: str) -> bool:
 
 
 def _run_all(works: list[NotebookWork], opts: Options) -> list[CellResult]:
-    """Grade the notebooks on a pool of ``opts.jobs`` threads (each waits on its sandbox)."""
+    """Plan each notebook's job here as the executor asks for more (``opts.jobs`` local
+    threads, or the dask cluster at ``opts.scheduler``: :mod:`.executors`), and judge each
+    notebook as soon as its job returns; only the jobs in flight are held in memory."""
     progress = Progress(len(works), enabled=opts.progress and bool(works))
     results: list[CellResult] = []
-    try:
-        with ThreadPoolExecutor(max_workers=max(1, opts.jobs)) as pool:
-            futures = [pool.submit(grade_notebook, w, opts) for w in works]
-            for fut in as_completed(futures):
-                results.extend(fut.result())
+    planned: dict[int, tuple[NotebookWork, dict]] = {}
+
+    def jobs():
+        for i, work in enumerate(works):
+            try:
+                job, prepared = plan_notebook(work, opts)
+            except Exception as exc:  # noqa: BLE001 - one broken notebook never stops the batch
+                results.extend(_failed_notebook(work, exc))
                 progress.update()
+                continue
+            planned[i] = (work, prepared)
+            yield i, job
+
+    try:
+        executor = make_executor(opts.jobs, opts.scheduler)
+        for i, outcome in executor.run(jobs(), opts.limits, opts.mode):
+            work, prepared = planned.pop(i)
+            results.extend(_failed_notebook(work, outcome) if isinstance(outcome, BaseException)
+                           else judge_notebook(work, prepared, outcome, opts))
+            progress.update()
     finally:
         progress.close()
     return results
 
 
-def grade_notebook(work: NotebookWork, opts: Options) -> list[CellResult]:
-    """Run one notebook's job and judge every graded name; never raises."""
+def plan_notebook(work: NotebookWork, opts: Options) -> tuple[NotebookJob, dict]:
+    """The sandbox's job for one notebook, and per graded name its drawn cases and hint."""
+    prepared = {name: _prepare_name(work, name, opts) for name, _, _ in work.names}
+    job = NotebookJob(f"{work.student}--{work.src.name}", work.src.setup_source,
+                      [p[0] for p in prepared.values()], student=work.student)
+    return job, prepared
+
+
+def judge_notebook(work: NotebookWork, prepared: dict, runs: dict[str, NameRun],
+                   opts: Options) -> list[CellResult]:
+    """Judge every graded name of one notebook from what its job returned; never raises."""
     try:
-        prepared = {name: _prepare_name(work, name, opts) for name, _, _ in work.names}
-        job = NotebookJob(f"{work.student}--{work.src.name}", work.src.setup_source,
-                          [p[0] for p in prepared.values()], student=work.student)
-        runs = run_notebook(job, opts.limits, opts.mode)
         held_hidden = any(not d.case.visible for _job, drawn, _hint in prepared.values()
                           for d in drawn)
         others = other_students(work.sub)
@@ -205,11 +227,17 @@ def grade_notebook(work: NotebookWork, opts: Options) -> list[CellResult]:
                            show_output=opts.reveal_hidden or not held_hidden, others=others)
                 for name, test_id, points in work.names]
     except Exception as exc:  # noqa: BLE001 - one broken notebook never stops the batch
-        traceback.print_exc()
-        print(f"error: the grader failed on {work.student}/{work.src.name}", file=sys.stderr)
-        return [CellResult(work.student, work.src.name, test_id, name, 0.0, points,
-                           Status.GRADER_ERROR, _grader_failed(exc), kind=_kind(name))
-                for name, test_id, points in work.names]
+        return _failed_notebook(work, exc)
+
+
+def _failed_notebook(work: NotebookWork, exc: BaseException) -> list[CellResult]:
+    """``grader-error`` rows for every graded name of a notebook the grader failed on (the
+    traceback goes to stderr)."""
+    traceback.print_exception(type(exc), exc, exc.__traceback__)
+    print(f"error: the grader failed on {work.student}/{work.src.name}", file=sys.stderr)
+    return [CellResult(work.student, work.src.name, test_id, name, 0.0, points,
+                       Status.GRADER_ERROR, _grader_failed(exc), kind=_kind(name))
+            for name, test_id, points in work.names]
 
 
 def _prepare_name(work: NotebookWork, name: str,

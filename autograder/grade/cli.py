@@ -1,6 +1,7 @@
 """``python -m autograder grade``: the command line.
 
-    python -m autograder grade SUBMITTED --out OUT [--jobs N] [--timeout S] [--db-url URL]
+    python -m autograder grade SUBMITTED --out OUT [--jobs N | --scheduler tcp://HOST:PORT]
+                                                   [--timeout S] [--db-url URL]
                                                    [--reveal-hidden] [--secret-file F]
                                                    [--unsafe-no-isolation]
 
@@ -10,7 +11,8 @@ why) unless ``--unsafe-no-isolation`` is given, which it announces loudly. Write
 ``OUT/grades.csv``, ``OUT/feedback/<student>/<notebook>.html``, ``OUT/report.html`` and keeps
 nbgrader's gradebook and ``autograded/`` notebooks in step. Exit status 0 whenever the batch was
 graded, whatever the submissions did; 2 for a usage error (no such folder, no source notebooks,
-unreadable secret, no sandbox).
+unreadable secret, no sandbox, a gradebook URL whose database driver is not installed, a
+``--scheduler`` that cannot be reached), said before any grading starts.
 """
 
 from __future__ import annotations
@@ -27,8 +29,10 @@ from ..isolation import UNSAFE_WARNING, IsolationUnavailable, Limits, Mode, prob
 from ..outputs import csv as csv_output
 from ..outputs import feedback, gradebook, report
 from ..exercises import REGISTRY
+from ..outputs.gradebook_url import MissingDriver, resolve_db_url
 from ..outputs.similarity import reference_source
 from .batch import Options, grade_batch
+from .executors import ClusterUnavailable
 from .reading import MAX_NOTEBOOK_MB
 from .secret import read_secret
 from .sources import default_sources, load_source
@@ -43,6 +47,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="output folder: grades.csv, feedback/, report.html, autograded/")
     add("--jobs", type=int, default=max(1, min(8, os.cpu_count() or 1)),
         help="sandboxes run in parallel (default: the number of CPUs, at most 8)")
+    add("--scheduler", default=None, metavar="tcp://HOST:PORT", help="run the sandboxes on the "
+        "workers of this dask.distributed scheduler instead of --jobs local ones (each worker "
+        "host needs bubblewrap and the instructors' install; this machine needs no sandbox)")
     add("--timeout", type=float, default=10.0, help="time limit per case, in seconds (default 10)")
     add("--db-url", default=None, help="nbgrader gradebook URL (default sqlite:///<course root>/"
         "gradebook.db; postgresql://... for a shared server)")
@@ -69,7 +76,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _mode(args) -> Mode | None:
-    """The sandbox mode, or None (after saying why) when grading must not start."""
+    """The sandbox mode, or None (after saying why) when grading must not start. With
+    ``--scheduler`` the sandboxes are the workers': each worker host probes its own before
+    every job (:func:`~autograder.grade.executors.run_sandboxed`), and never runs one
+    unconfined, so this machine needs none and ``--unsafe-no-isolation`` is not honoured."""
+    if args.scheduler:
+        return Mode.ISOLATED
     try:
         return probe()
     except IsolationUnavailable as exc:
@@ -87,8 +99,21 @@ def _options(args, secret: bytes, mode: Mode) -> Options:
                     load_timeout=args.load_timeout if args.load_timeout else 30.0 + args.timeout,
                     memory_mb=args.memory_mb, job_timeout=args.job_timeout)
     return Options(out=args.out, jobs=max(1, args.jobs), limits=limits, secret=secret,
-                   reveal_hidden=args.reveal_hidden, mode=mode,
+                   reveal_hidden=args.reveal_hidden, mode=mode, scheduler=args.scheduler,
                    max_notebook_mb=args.max_notebook_mb, progress=not args.quiet)
+
+
+def _check_db_url(args) -> bool:
+    """Resolve ``args.db_url`` (its driver named, :mod:`autograder.outputs.gradebook_url`);
+    False, after saying why, when the gradebook could not be written."""
+    if args.db_url is None or args.no_gradebook:
+        return True
+    try:
+        args.db_url = resolve_db_url(args.db_url)
+    except (MissingDriver, ValueError) as exc:
+        print(f"error: --db-url: {exc}", file=sys.stderr)
+        return False
+    return True
 
 
 def main(args: argparse.Namespace) -> int:
@@ -107,13 +132,17 @@ def main(args: argparse.Namespace) -> int:
         print(f"error: cannot read the course secret: {exc}", file=sys.stderr)
         return 2
     mode = _mode(args)
-    if mode is None:
+    if mode is None or not _check_db_url(args):
         return 2
     sources = [load_source(p) for p in paths]
     args.out.mkdir(parents=True, exist_ok=True)
     os.chmod(args.out, 0o700)
     t0 = time.monotonic()
-    batch = grade_batch(args.submitted, sources, _options(args, secret, mode))
+    try:
+        batch = grade_batch(args.submitted, sources, _options(args, secret, mode))
+    except ClusterUnavailable as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     _write_outputs(batch, sources, args)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"graded {len(batch.students)} students, {len(batch.results)} cells in "
