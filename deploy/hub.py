@@ -3,8 +3,8 @@
 Run as root, from the instructors' virtual environment (``make hub`` does both)::
 
     .venv/bin/python deploy/hub.py up                     # prepare everything, run the hub
-    .venv/bin/python deploy/hub.py add-student crsid PW   # a Unix user in the students' group
-    .venv/bin/python deploy/hub.py add-instructor crsid PW
+    .venv/bin/python deploy/hub.py add-student crsid      # a Unix user in the students' group
+    .venv/bin/python deploy/hub.py add-instructor crsid   # (asks for the password)
 
 What ``up`` builds, under the state folder (default ``/srv/4f9-hub``, owned by root):
 
@@ -334,8 +334,8 @@ def _up(args) -> int:
     cmd, env = hub_command(s)
     print(f"\nThe course hub: http://{'localhost' if s.ip in ('127.0.0.1', '0.0.0.0') else s.ip}"
           f":{s.port}/  (formgrader: /services/{s.course_id}/)\n"
-          f"Add a student:     sudo {sys.executable} {__file__} add-student NAME PASSWORD\n"
-          f"Add an instructor: sudo {sys.executable} {__file__} add-instructor NAME PASSWORD"
+          f"Add a student:     sudo {sys.executable} {__file__} --state {s.state} add-student NAME\n"
+          f"Add an instructor: sudo {sys.executable} {__file__} --state {s.state} add-instructor NAME"
           " (then restart the hub)\nStop: Ctrl-C\n", flush=True)
     os.chdir(s.paths["hub_dir"])
     os.execve(cmd[0], cmd, env)
@@ -344,7 +344,14 @@ def _up(args) -> int:
 
 def _add(args, group_attr: str) -> int:
     s = _settings(args)
-    ensure_user(args.name, [getattr(s, group_attr)], args.password)
+    password = args.password
+    if password is None:
+        import getpass
+
+        password = getpass.getpass(f"password for {args.name}: ")
+        if password != getpass.getpass("again: "):
+            raise SystemExit("the two passwords differ")
+    ensure_user(args.name, [getattr(s, group_attr)], password)
     print(f"{args.name} can log in at http://localhost:{s.port}/", flush=True)
     return 0
 
@@ -360,7 +367,8 @@ def main(argv: list[str] | None = None) -> int:
     for role in ("student", "instructor"):
         p = sub.add_parser(f"add-{role}", help=f"a Unix user in the {role}s' group")
         p.add_argument("name")
-        p.add_argument("password")
+        p.add_argument("password", nargs="?",
+                       help="asked for when omitted (a password on the command line shows in ps)")
     args = parser.parse_args(argv)
     if args.command == "up":
         return _up(args)
