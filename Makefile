@@ -55,12 +55,13 @@ wheel-deps:
 	  else echo "warning: no gcc or Python headers (apt-get install gcc python3-dev); the student wheel cannot be built"; fi; \
 	fi
 
-## hub-deps: Debian's configurable-http-proxy (JupyterHub's proxy) and python3-venv (the
+## hub-deps: Debian's configurable-http-proxy (JupyterHub's proxy), python3-venv (the
 ## students' and instructors' environments on the hub are venvs of Debian's /usr/bin/python3)
+## and acl (setfacl: the graders read the exchange's inbound through a default ACL)
 hub-deps:
-	@if [ ! -x /usr/bin/configurable-http-proxy ] || ! /usr/bin/python3 -c 'import ensurepip, venv' >/dev/null 2>&1; then \
+	@if [ ! -x /usr/bin/configurable-http-proxy ] || [ ! -x /usr/bin/setfacl ] || ! /usr/bin/python3 -c 'import ensurepip, venv' >/dev/null 2>&1; then \
 	  if [ "$$(id -u)" = 0 ]; then \
-	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends node-configurable-http-proxy python3-venv >/dev/null 2>&1) \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends node-configurable-http-proxy python3-venv acl >/dev/null 2>&1) \
 	      || echo "warning: could not install node-configurable-http-proxy/python3-venv; the hub test will be skipped"; \
 	  else echo "warning: not root, cannot apt-get install node-configurable-http-proxy; the hub test will be skipped"; fi; \
 	fi

@@ -179,6 +179,10 @@ def build_student_env(env_dir: Path, wheel_cache: Path) -> Path:
         _pip(env_dir, JUPYTERHUB_REQUIREMENT)
         stamp.write_text(JUPYTERHUB_REQUIREMENT)
     shutil.copyfile(DEPLOY / "private_exchange.py", _site_packages(env_dir) / "private_exchange.py")
+    settings = env_dir / "share" / "jupyter" / "lab" / "settings"
+    settings.mkdir(parents=True, exist_ok=True)  # no "get Jupyter news?" pop-up for the class
+    (settings / "overrides.json").write_text(json.dumps(
+        {"@jupyterlab/apputils-extension:notification": {"fetchNews": "false"}}) + "\n")
     return env_dir
 
 
@@ -274,6 +278,10 @@ def prepare_course(s: HubSettings) -> None:
     inbound = Path(s.paths["exchange"]) / s.course_id / "inbound"
     shutil.chown(inbound, s.grader, s.instructors_group)
     os.chmod(inbound, 0o2733)  # drwx-wx-wx + setgid: submissions take the graders' group
+    # ... but nbgrader writes timestamp.txt after copytree has reset the submission folder's
+    # mode (setgid gone), so that file keeps the student's group: a default ACL gives the graders
+    # every file and folder made in the inbound, whatever its group; nothing for "other"
+    run(["setfacl", "-d", "-m", f"u::rwx,g::---,o::---,g:{s.instructors_group}:rwX", inbound])
 
 
 def write_settings(s: HubSettings) -> Path:
@@ -293,8 +301,9 @@ def prepare(s: HubSettings, wheel_cache: Path) -> Path:
     """Everything but the hub process; returns the settings file."""
     if os.geteuid() != 0:
         raise PermissionError("the hub must be prepared as root (real users, setuid spawner)")
-    if not Path(s.proxy_command).exists():
-        raise FileNotFoundError(f"{s.proxy_command} is missing: `make hub-deps` installs it")
+    for tool in (s.proxy_command, "/usr/bin/setfacl"):
+        if not Path(tool).exists():
+            raise FileNotFoundError(f"{tool} is missing: `make hub-deps` installs it")
     ensure_group(s.students_group)
     ensure_user(s.grader, [s.instructors_group])
     settings = write_settings(s)
@@ -310,8 +319,12 @@ def hub_command(s: HubSettings) -> tuple[list[str], dict]:
     """The command line and environment that run the hub (as root)."""
     env_dir = s.paths["instructor_env"]
     env = {"PATH": f"{env_dir}/bin:/usr/local/bin:/usr/bin:/bin", "LANG": "C.UTF-8",
-           "COURSE_HUB_SETTINGS": str(Path(s.state) / "hub.json")}
-    return [f"{env_dir}/bin/jupyterhub", "-f", str(DEPLOY / "jupyterhub_config.py")], env
+           "COURSE_HUB_SETTINGS": str(Path(s.state) / "hub.json"),
+           # Debian's configurable-http-proxy finds its modules here; Debian's nodejs looks
+           # there by itself, a Node.js from elsewhere (nodesource) does not
+           "NODE_PATH": "/usr/share/nodejs:/usr/lib/nodejs"}
+    return [f"{env_dir}/bin/python", str(DEPLOY / "run_hub.py"), "-f",
+            str(DEPLOY / "jupyterhub_config.py")], env
 
 
 # --- command line -----------------------------------------------------------------------------

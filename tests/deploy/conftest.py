@@ -33,7 +33,8 @@ sys.path.insert(0, str(REPO / "tests"))
 import hub  # noqa: E402  (deploy/hub.py)
 
 ARTIFACTS = REPO / "test-artifacts" / "deploy"
-ENVS = ARTIFACTS / "envs"
+#: the two environments, cached between runs (HUB_TEST_ENVS: elsewhere, e.g. while debugging)
+ENVS = Path(os.environ.get("HUB_TEST_ENVS", str(ARTIFACTS / "envs")))
 CHROMIUM = Path("/usr/bin/chromium")
 #: test accounts: a prefix no real account has
 PREFIX = "t4f9"
@@ -46,7 +47,7 @@ def _skip_reason() -> str | None:
     if sys.platform != "linux" or os.geteuid() != 0:
         return "the hub test creates Unix users and runs a setuid spawner: run it as root"
     for tool, package in (("/usr/bin/configurable-http-proxy", "node-configurable-http-proxy"),
-                          (str(CHROMIUM), "chromium"), ("/usr/sbin/useradd", "passwd")):
+                          (str(CHROMIUM), "chromium"), ("/usr/sbin/useradd", "passwd"), ("/usr/bin/setfacl", "acl")):
         if not Path(tool).exists():
             return f"{tool} is missing (Debian package {package}; `make hub-deps` installs it)"
     if subprocess.run([hub.SYSTEM_PYTHON, "-c", "import ensurepip, venv"],

@@ -59,7 +59,7 @@ def _shot(page, name: str) -> None:
 
 def _login(browser, url: str, user: str, password: str, first_url: str | None = None):
     page = browser.new_context(viewport={"width": 1400, "height": 1000}).new_page()
-    page.set_default_timeout(120_000)
+    page.set_default_timeout(60_000)
     page.goto(f"{url}/hub/login")
     page.fill("#username_input", user)
     page.fill("#password_input", password)
@@ -100,28 +100,42 @@ def _fill(page, cell, text: str) -> None:
     page.keyboard.insert_text(text)
 
 
+def _cell_index(path: Path, pick) -> int:
+    cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+    return next(i for i, c in enumerate(cells) if pick(c))
+
+
 def _answer(page, url: str, user: str, letter: str, written: str | None) -> None:
-    """Open the notebook, type the answers into their cells, save."""
+    """Open the notebook, type the answers into their cells, save.
+
+    The answer cells are reached from the first stub with the keyboard (command mode, ``j``
+    per cell, ``Enter`` to edit), counting cells in the fetched notebook: a rendered markdown
+    cell is not reliably put in edit mode by a click."""
+    saved = Path(hub.home_of(user)) / A / f"{NB}.ipynb"
+    stub_at = _cell_index(saved, lambda c: "NotImplementedError" in "".join(c["source"]))
+    answer_at = _cell_index(saved, lambda c: c["metadata"].get("nbgrader", {}).get("grade_id")
+                            == WRITTEN)
     page.goto(f"{url}/user/{user}/lab/tree/{A}/{NB}.ipynb")
     nb = page.locator(".jp-NotebookPanel:visible .jp-Notebook")
     stub = nb.locator(".jp-CodeCell", has_text="NotImplementedError").first
     stub.wait_for()
     _fill(page, stub, f'{CHOICE} = "{letter}"')
     if written:
-        answer = nb.locator(".jp-MarkdownCell", has_text="YOUR ANSWER HERE").first
-        answer.scroll_into_view_if_needed()
-        answer.dblclick()
-        _fill(page, answer, written)
+        page.keyboard.press("Escape")
+        for _ in range(answer_at - stub_at):
+            page.keyboard.press("j")
+        page.keyboard.press("Enter")
+        page.keyboard.press("Control+a")
+        page.keyboard.insert_text(written)
         page.keyboard.press("Shift+Enter")
     page.keyboard.press("Control+s")
-    saved = Path(hub.home_of(user)) / A / f"{NB}.ipynb"
-    page.wait_for_function("() => true")  # let the save request leave
     for _ in range(120):
-        if f'{CHOICE} = \\"{letter}\\"' in saved.read_text(encoding="utf-8"):
+        text = saved.read_text(encoding="utf-8")
+        if f'{CHOICE} = \\"{letter}\\"' in text and (not written or written in text):
             break
         page.wait_for_timeout(500)
     else:
-        pytest.fail(f"{user}'s answer never reached {saved}")
+        pytest.fail(f"{user}'s answers never reached {saved}")
     _shot(page, f"02-{user}-answered")
 
 
@@ -240,6 +254,16 @@ def _feedback_page(page, url: str, user: str) -> str:
     return html.unescape(page.locator("body").inner_text())
 
 
+def _shoot_everything(browser) -> None:
+    """A screenshot of every open page, for the failure's report."""
+    for i, context in enumerate(browser.contexts):
+        for j, page in enumerate(context.pages):
+            try:
+                page.screenshot(path=str(ARTIFACTS / f"failure-{i}-{j}.png"))
+            except Exception:  # noqa: BLE001  (the page may be gone; the failure matters)
+                pass
+
+
 def _term(course_hub) -> None:
     from playwright.sync_api import sync_playwright
 
@@ -260,6 +284,9 @@ def _term(course_hub) -> None:
             hub.as_grader(settings, [python, "-m", "autograder", "feedback", "--grading", "grading",
                                      "--course", settings.paths["course_dir"]])
             ana, ben = (_feedback_page(pages[u], url, u) for u in (ANA, BEN))
+        except Exception:
+            _shoot_everything(browser)
+            raise
         finally:
             browser.close()
     assert COMMENT in ana and ANA_TEXT in ana and f"{MARK:g}" in ana
