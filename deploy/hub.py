@@ -179,11 +179,16 @@ def build_student_env(env_dir: Path, wheel_cache: Path) -> Path:
         _pip(env_dir, JUPYTERHUB_REQUIREMENT)
         stamp.write_text(JUPYTERHUB_REQUIREMENT)
     shutil.copyfile(DEPLOY / "private_exchange.py", _site_packages(env_dir) / "private_exchange.py")
+    _no_news(env_dir)
+    return env_dir
+
+
+def _no_news(env_dir: Path) -> None:
+    """No "get notified about Jupyter news?" pop-up in the environment's JupyterLab."""
     settings = env_dir / "share" / "jupyter" / "lab" / "settings"
-    settings.mkdir(parents=True, exist_ok=True)  # no "get Jupyter news?" pop-up for the class
+    settings.mkdir(parents=True, exist_ok=True)
     (settings / "overrides.json").write_text(json.dumps(
         {"@jupyterlab/apputils-extension:notification": {"fetchNews": "false"}}) + "\n")
-    return env_dir
 
 
 def _instructor_digest() -> str:
@@ -202,6 +207,7 @@ def build_instructor_env(env_dir: Path, group: str) -> Path:
     if not stamp.exists() or stamp.read_text() != _instructor_digest():
         _pip(env_dir, "-e", f"{REPO}[hub]")
         stamp.write_text(_instructor_digest())
+    _no_news(env_dir)
     shutil.chown(env_dir, "root", group)
     os.chmod(env_dir, 0o750)
     return env_dir

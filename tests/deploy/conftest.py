@@ -47,7 +47,8 @@ def _skip_reason() -> str | None:
     if sys.platform != "linux" or os.geteuid() != 0:
         return "the hub test creates Unix users and runs a setuid spawner: run it as root"
     for tool, package in (("/usr/bin/configurable-http-proxy", "node-configurable-http-proxy"),
-                          (str(CHROMIUM), "chromium"), ("/usr/sbin/useradd", "passwd"), ("/usr/bin/setfacl", "acl")):
+                          (str(CHROMIUM), "chromium"), ("/usr/sbin/useradd", "passwd"),
+                          ("/usr/bin/setfacl", "acl")):
         if not Path(tool).exists():
             return f"{tool} is missing (Debian package {package}; `make hub-deps` installs it)"
     if subprocess.run([hub.SYSTEM_PYTHON, "-c", "import ensurepip, venv"],

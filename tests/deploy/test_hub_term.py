@@ -219,6 +219,7 @@ def _mark_in_the_formgrader(browser, course_hub) -> str:
     grader = page.frame_locator("iframe").first
     for link in ("Manual Grading", A, NB):
         grader.get_by_role("link", name=link).click()
+    grader.get_by_role("link", name=re.compile(r"^Submission #1$")).wait_for()
     grader.get_by_text("Show All Names").click()
     grader.get_by_role("link", name=ANA).first.click()
     grader.locator("textarea.comment").first.wait_for()
