@@ -347,8 +347,19 @@ def _settings(args) -> HubSettings:
     return HubSettings(**values)
 
 
+def _warn_if_students_can_read_the_repository() -> None:
+    """The instructors' environment imports this clone: model answers and hidden cases."""
+    notebooks = REPO / "notebooks"
+    if any(os.stat(p).st_mode & 0o004 for p in (REPO, notebooks)) and all(
+            os.stat(p).st_mode & 0o001 for p in (REPO.parent, REPO)):
+        print(f"warning: {REPO} is readable by every user, students included (model answers in "
+              f"{notebooks}); see deploy/README.md, 'Keep the repository unreadable by students'",
+              file=sys.stderr, flush=True)
+
+
 def _up(args) -> int:
     s = _settings(args)
+    _warn_if_students_can_read_the_repository()
     prepare(s, Path(args.wheel_cache))
     cmd, env = hub_command(s)
     print(f"\nThe course hub: http://{'localhost' if s.ip in ('127.0.0.1', '0.0.0.0') else s.ip}"

@@ -26,21 +26,9 @@ from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "deploy"))
-sys.path.insert(0, str(REPO / "tests"))
+from hubtools import ARTIFACTS, CHROMIUM, ENVS, GRADER, INSTRUCTOR, PREFIX, STUDENTS
 
-import hub  # noqa: E402  (deploy/hub.py)
-
-ARTIFACTS = REPO / "test-artifacts" / "deploy"
-#: the two environments, cached between runs (HUB_TEST_ENVS: elsewhere, e.g. while debugging)
-ENVS = Path(os.environ.get("HUB_TEST_ENVS", str(ARTIFACTS / "envs")))
-CHROMIUM = Path("/usr/bin/chromium")
-#: test accounts: a prefix no real account has
-PREFIX = "t4f9"
-STUDENTS = (f"{PREFIX}ana", f"{PREFIX}ben")
-INSTRUCTOR = f"{PREFIX}prof"
-GRADER = f"{PREFIX}grader"
+import hub  # deploy/hub.py (hubtools puts deploy/ on sys.path)
 
 
 def _skip_reason() -> str | None:
