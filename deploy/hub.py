@@ -16,9 +16,12 @@ What ``up`` builds, under the state folder (default ``/srv/4f9-hub``, owned by r
 - ``etc/student``, ``etc/instructor``: the Jupyter config folders of the two (nbgrader's course
   id and exchange, the private submit, the formgrader's ``frame-ancestors``);
 - ``exchange/``: nbgrader's exchange, root-owned with the sticky bit (so no student can rename or
-  remove the course's folder, nbgrader #1225), its ``inbound`` owned by the graders' group;
+  remove the course's folder, nbgrader #1225), its ``inbound`` owned by the grader account,
+  readable by the instructors' group through a default ACL and by no student;
 - ``hub/``: JupyterHub's database, cookie secret and proxy pid (root only, 0700);
 - ``hub.json``: the settings ``deploy/jupyterhub_config.py`` reads.
+
+The hub itself runs as ``deploy/run_hub.py`` (JupyterHub, patient with the formgrader service).
 
 The course itself (``autograder``'s nbgrader course folder) lives in the grader account's home,
 ``/home/<grader>/course``, with ``exchange`` a link to the hub's exchange.
