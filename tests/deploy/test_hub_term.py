@@ -195,12 +195,13 @@ def _check_privacy_on_disk(settings) -> None:
 
 def _check_privacy_through_the_hub(page, url: str) -> None:
     """Ben, logged in, asks the hub for Ana's notebook and for the Formgrader: refused."""
-    for path in (f"/user/{ANA}/files/{A}/{NB}.ipynb", f"/user/{ANA}/api/contents/{A}/{NB}.ipynb",
-                 "/services/4f9/formgrader"):
+    for what, path in (("anas-notebook", f"/user/{ANA}/files/{A}/{NB}.ipynb"),
+                       ("anas-contents-api", f"/user/{ANA}/api/contents/{A}/{NB}.ipynb"),
+                       ("the-formgrader", "/services/4f9/formgrader")):
         resp = page.goto(f"{url}{path}")
         assert resp is not None and resp.status in (403, 404), (path, resp and resp.status)
         assert ANA_TEXT not in page.content()
-    _shot(page, "05-ben-refused-anas-notebook")
+        _shot(page, f"05-ben-refused-{what}")
 
 
 def _grade(settings) -> None:
