@@ -68,6 +68,15 @@ def _remove_accounts(settings: hub.HubSettings) -> None:
         subprocess.run(["groupdel", group], capture_output=True)
 
 
+def _stop_orphaned_proxy(pid_file: Path) -> None:
+    """A hub that fails while starting leaves its proxy running: stop it (its pid, from the
+    hub's own pid file)."""
+    try:
+        os.kill(int(pid_file.read_text().strip()), 15)
+    except (OSError, ValueError):
+        pass
+
+
 def _wait_for_hub(proc, url: str, log: Path, timeout: float = 120) -> None:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline and proc.poll() is None:
@@ -117,5 +126,6 @@ def course_hub():
                 proc.wait(timeout=30)
             except subprocess.TimeoutExpired:
                 proc.kill()
+        _stop_orphaned_proxy(Path(settings.paths["hub_dir"]) / "proxy.pid")
         _remove_accounts(settings)
         shutil.rmtree(state, ignore_errors=True)
