@@ -72,9 +72,12 @@ def _stop_orphaned_proxy(pid_file: Path) -> None:
     """A hub that fails while starting leaves its proxy running: stop it (its pid, from the
     hub's own pid file)."""
     try:
-        os.kill(int(pid_file.read_text().strip()), 15)
+        pid = int(pid_file.read_text().strip())
+        cmdline = Path(f"/proc/{pid}/cmdline").read_bytes()
     except (OSError, ValueError):
-        pass
+        return
+    if b"configurable-http-proxy" in cmdline:  # not a process that took over a stale pid
+        os.kill(pid, 15)
 
 
 def _wait_for_hub(proc, url: str, log: Path, timeout: float = 120) -> None:
