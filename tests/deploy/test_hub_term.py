@@ -57,7 +57,8 @@ def _shot(page, name: str) -> None:
     page.screenshot(path=str(ARTIFACTS / f"{name}.png"))
 
 
-def _login(browser, url: str, user: str, password: str, first_url: str | None = None):
+def _login(browser, url: str, user: str, password: str):
+    """A browser context of its own, logged in through the hub's login form (PAM)."""
     page = browser.new_context(viewport={"width": 1400, "height": 1000}).new_page()
     page.set_default_timeout(60_000)
     page.goto(f"{url}/hub/login")
