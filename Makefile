@@ -11,7 +11,8 @@ PORT   ?= 8888
 # make lab: the students' own environment (their wheel only, none of this repository's sources)
 STUDENT_VENV := .venv-student
 
-.PHONY: lab instructor test test-fast bench browser-deps sandbox-deps wheel-deps postgres-deps clean
+.PHONY: lab instructor test test-fast bench browser-deps sandbox-deps wheel-deps postgres-deps \
+        hub hub-deps clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -65,8 +66,28 @@ wheel-deps:
 	  else echo "warning: no gcc or Python headers (apt-get install gcc python3-dev); the student wheel cannot be built"; fi; \
 	fi
 
+## hub-deps: Debian's configurable-http-proxy (JupyterHub's proxy), python3-venv (the
+## students' and instructors' environments on the hub are venvs of Debian's /usr/bin/python3)
+## and acl (setfacl: the graders read the exchange's inbound through a default ACL)
+hub-deps:
+	@if [ ! -x /usr/bin/configurable-http-proxy ] || [ ! -x /usr/bin/setfacl ] || ! /usr/bin/python3 -c 'import ensurepip, venv' >/dev/null 2>&1; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends node-configurable-http-proxy python3-venv acl >/dev/null 2>&1) \
+	      || echo "warning: could not install node-configurable-http-proxy/python3-venv; the hub test will be skipped"; \
+	  else echo "warning: not root, cannot apt-get install node-configurable-http-proxy; the hub test will be skipped"; fi; \
+	fi
+
+## hub: the course on a JupyterHub on this machine (as root; see deploy/README.md).
+## HUB_STATE=/srv/4f9-hub HUB_PORT=8000 HUB_IP=127.0.0.1 by default
+HUB_STATE ?= /srv/4f9-hub
+HUB_PORT  ?= 8000
+HUB_IP    ?= 127.0.0.1
+hub: $(STAMP) hub-deps wheel-deps sandbox-deps
+	@test "$$(id -u)" = 0 || { echo "make hub runs as root (it creates Unix users and runs a setuid spawner)"; exit 2; }
+	$(BIN)/python deploy/hub.py --state $(HUB_STATE) up --port $(HUB_PORT) --ip $(HUB_IP)
+
 ## test: the whole suite (library, notebooks, grading bank, browser)
-test: $(STAMP) browser-deps sandbox-deps wheel-deps postgres-deps
+test: $(STAMP) browser-deps sandbox-deps wheel-deps postgres-deps hub-deps
 	$(BIN)/python -m pytest -n 2 --dist loadgroup -q
 
 ## bench: benchmarks against peers measured in the same run (writes benchmarks/results.md)

@@ -1,0 +1,134 @@
+"""A real JupyterHub of the course on localhost (``deploy/hub.py``), for one test module.
+
+Real Unix users (two students, an instructor and the grader account) are created for the run
+and removed after it; they log in through PAM, JupyterHub's default authenticator, with random
+passwords set by ``chpasswd``: the test walks the same path as a class, and each user's server
+runs under that user's uid (``LocalProcessSpawner``), so file permissions are really tested.
+The students' and instructors' environments are cached in ``test-artifacts/deploy/envs/``
+(rebuilt when the wheel or ``pyproject.toml`` changes); the hub's state lives in a fresh folder
+under ``/tmp`` (0755: the users must reach their environments' config through it).
+
+Skipped, with the reason, when not root, or when Debian's ``configurable-http-proxy``,
+``chromium`` or ``python3-venv`` is missing (``make test`` installs them as root).
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+from pathlib import Path
+
+import pytest
+
+from hubtools import ARTIFACTS, CHROMIUM, ENVS, GRADER, INSTRUCTOR, PREFIX, STUDENTS
+
+import hub  # deploy/hub.py (hubtools puts deploy/ on sys.path)
+
+
+def _skip_reason() -> str | None:
+    if sys.platform != "linux" or os.geteuid() != 0:
+        return "the hub test creates Unix users and runs a setuid spawner: run it as root"
+    for tool, package in (("/usr/bin/configurable-http-proxy", "node-configurable-http-proxy"),
+                          (str(CHROMIUM), "chromium"), ("/usr/sbin/useradd", "passwd"),
+                          ("/usr/bin/setfacl", "acl")):
+        if not Path(tool).exists():
+            return f"{tool} is missing (Debian package {package}; `make hub-deps` installs it)"
+    if subprocess.run([hub.SYSTEM_PYTHON, "-c", "import ensurepip, venv"],
+                      capture_output=True).returncode != 0:
+        return "Debian's python3-venv is missing (`make hub-deps` installs it)"
+    return None
+
+
+def _remove_account(name: str) -> None:
+    """End what still runs as ``name`` (by pid: the servers and kernels this test started), then
+    remove the account and its home."""
+    try:
+        hub.pwd.getpwnam(name)
+    except KeyError:
+        return
+    ps = subprocess.run(["ps", "-u", name, "-o", "pid="], capture_output=True, text=True)
+    for pid in ps.stdout.split():
+        try:
+            os.kill(int(pid), 9)
+        except (ProcessLookupError, ValueError):
+            pass
+    subprocess.run(["userdel", "--remove", name], capture_output=True)
+
+
+def _remove_accounts(settings: hub.HubSettings) -> None:
+    for name in (*STUDENTS, INSTRUCTOR, GRADER):
+        _remove_account(name)
+    for group in (settings.students_group, settings.instructors_group):
+        subprocess.run(["groupdel", group], capture_output=True)
+
+
+def _stop_orphaned_proxy(pid_file: Path) -> None:
+    """A hub that fails while starting leaves its proxy running: stop it (its pid, from the
+    hub's own pid file)."""
+    try:
+        pid = int(pid_file.read_text().strip())
+        cmdline = Path(f"/proc/{pid}/cmdline").read_bytes()
+    except (OSError, ValueError):
+        return
+    if b"configurable-http-proxy" in cmdline:  # not a process that took over a stale pid
+        os.kill(pid, 15)
+
+
+def _wait_for_hub(proc, url: str, log: Path, timeout: float = 120) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and proc.poll() is None:
+        try:
+            with urllib.request.urlopen(f"{url}/hub/api", timeout=3) as r:
+                if r.status == 200:
+                    return
+        except OSError:
+            time.sleep(0.5)
+    pytest.fail(f"the hub did not come up:\n{log.read_text()[-4000:]}")
+
+
+@pytest.fixture(scope="module")
+def course_hub():
+    """A running hub: ``dict(url, settings, passwords, log)``; everything removed afterwards."""
+    reason = _skip_reason()
+    if reason:
+        pytest.skip(reason)
+    import studentenv
+
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    state = Path(tempfile.mkdtemp(prefix="4f9-hub-", dir="/tmp"))
+    os.chmod(state, 0o755)
+    settings = hub.HubSettings(state=str(state), port=hub.free_port(), course_id="4f9",
+                               grader=GRADER, students_group=f"{PREFIX}-students",
+                               instructors_group=f"{PREFIX}-instructors", envs=str(ENVS))
+    _remove_accounts(settings)  # a run killed half-way leaves them behind
+    passwords = {name: secrets.token_urlsafe(12) for name in (*STUDENTS, INSTRUCTOR)}
+    log_path = ARTIFACTS / "hub.log"
+    proc = None
+    try:
+        hub.prepare(settings, studentenv.BUILD_CACHE)
+        for name in STUDENTS:
+            hub.ensure_user(name, [settings.students_group], passwords[name])
+        hub.ensure_user(INSTRUCTOR, [settings.instructors_group], passwords[INSTRUCTOR])
+        cmd, env = hub.hub_command(settings)
+        log = open(log_path, "w")
+        proc = subprocess.Popen(cmd, env=env, cwd=settings.paths["hub_dir"], stdout=log,
+                                stderr=subprocess.STDOUT)
+        url = f"http://127.0.0.1:{settings.port}"
+        _wait_for_hub(proc, url, log_path)
+        yield {"url": url, "settings": settings, "passwords": passwords, "log": log_path}
+    finally:
+        if proc is not None:
+            proc.terminate()  # the hub stops the users' servers and the formgrader service
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+        _stop_orphaned_proxy(Path(settings.paths["hub_dir"]) / "proxy.pid")
+        _remove_accounts(settings)
+        shutil.rmtree(state, ignore_errors=True)
