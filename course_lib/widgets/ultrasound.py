@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import ultrasound as us
 from ..plots import ultrasound as uplots
+from ._view import FigureView
 
 
 class BScanExplorer:
@@ -86,13 +87,10 @@ class BScanExplorer:
             w.observe(self._on_change, names="value")
         left = widgets.VBox(self.controls[:3] + [self.freq])
         right = widgets.VBox(self.controls[3:6] + [self.tgc])
-        canvas = self.fig.canvas
-        if isinstance(canvas, widgets.DOMWidget):  # ipympl
-            self.output = None
-            view = canvas
-        else:  # inline / Agg: show a static copy in an Output widget
-            self.output = widgets.Output()
-            view = self.output
+        self._view = FigureView()                  # ipympl: the canvas, redrawn by blitting
+        view = self._view.widget(self.fig)
+        self.output = self._view.output
+        if self.output is not None:  # inline / Agg: show a static copy in an Output widget
             self._show_static()
         self.widget = widgets.VBox([widgets.HBox([left, right]), view])
 
@@ -159,7 +157,7 @@ class BScanExplorer:
             line.set_data(depth, self._aline(env, x, xc))
         self._write_summary()
         if self.output is None:
-            self.fig.canvas.draw_idle()
+            self._view.redraw(self.fig)
         else:
             self._show_static()
 
