@@ -47,7 +47,7 @@ from matplotlib.legend import Legend
 from matplotlib.patches import Patch
 from matplotlib.layout_engine import PlaceHolderLayoutEngine
 
-__all__ = ["Blitter", "FigureExplorer", "FigureView"]
+__all__ = ["Blitter", "FigureExplorer", "FigureView", "use_blitting"]
 
 
 def _is_ipympl(canvas) -> bool:
@@ -362,3 +362,20 @@ class FigureExplorer:
         from IPython.display import display
 
         display(self.widget)
+
+
+def use_blitting(explorer) -> FigureView:
+    """Make ``explorer`` redraw by blitting whatever its canvas, plain Agg included (the tests
+    and ``benchmarks/bench_widgets.py`` measure the browser's redraw path headless this way).
+
+    Returns the new :class:`FigureView`; its ``blitter`` counts full draws and blits.
+    """
+    view = FigureView(blit=True)
+    if isinstance(explorer, FigureExplorer):
+        explorer._figure_view = view
+    elif hasattr(explorer, "_view"):  # the B-scan and clipping explorers hold their own view
+        explorer._view = view
+        explorer.output = None  # redraw the figure itself, not a static copy in an Output
+    else:
+        raise ValueError(f"explorer: {type(explorer).__name__} has no figure view to replace")
+    return view

@@ -3,7 +3,9 @@
 Built from explicit ipywidgets controls with ``.observe`` callbacks (no ``interact``): the
 figure is drawn once and :meth:`BScanExplorer.update` changes its artists in place
 (``AxesImage.set_data``, ``Line2D.set_data``, ``Text.set_text``). Works with the ipympl backend
-(``%matplotlib widget``) in JupyterLab and headless with Agg.
+(``%matplotlib widget``) in JupyterLab and headless with Agg. Under ipympl the figure is
+blitted (:mod:`course_lib.widgets._view`, issue 15): axes, ticks and labels stay cached, and
+only the image, the outlines, the A-lines and the title are drawn again.
 """
 
 from __future__ import annotations

@@ -47,17 +47,6 @@ def _control(explorer, name):
     return getattr(explorer, name)
 
 
-def _force_blitting(explorer):
-    """Give the explorer a blitting view under Agg (as ipympl would)."""
-    view = _view.FigureView(blit=True)
-    if isinstance(explorer, _view.FigureExplorer):
-        explorer._figure_view = view
-    else:  # the B-scan and clipping explorers hold their view themselves
-        explorer._view = view
-        explorer.output = None
-    return view
-
-
 def _pixels(fig) -> np.ndarray:
     return np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(np.int16).copy()
 
@@ -66,7 +55,7 @@ def _pixels(fig) -> np.ndarray:
 def driven(request):
     cls, moves = MOVES[request.param]
     explorer = cls()
-    view = _force_blitting(explorer)
+    view = _view.use_blitting(explorer)
     explorer.update()
     yield request.param, explorer, view, moves
     plt.close(explorer.fig)
@@ -93,7 +82,7 @@ def test_a_blit_draws_no_tick_label(driven):
 
 def test_axes_limits_change_means_a_full_draw():
     ex = CollimatorExplorer()
-    view = _force_blitting(ex)
+    view = _view.use_blitting(ex)
     ex.update()
     ex.z.value = 600.0                                     # side view only: fixed limits
     assert (view.blitter.full_draws, view.blitter.blits) == (1, 1)
@@ -121,7 +110,7 @@ def test_collimator_side_view_fits_its_mm_into_fixed_axes():
 
 def test_a_changed_text_is_drawn_again_not_taken_from_its_sprite():
     ex = CaseExplorer(index=1)
-    view = _force_blitting(ex)
+    view = _view.use_blitting(ex)
     ex.update()
     ex.iso.value = 0.3                                     # sprites of the unchanged artists
     ex.index.value = 254
