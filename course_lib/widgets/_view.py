@@ -19,13 +19,14 @@ back for a frame). Of the approaches weighed:
 * throttling only hides latency: the kernel handles one slider message at a time anyway;
 * **blitting** keeps matplotlib and ipympl and removes the waste, so it is what
   :class:`Blitter` does. The layout is solved once and then frozen; the static part of the
-  figure (axes frames, ticks, tick and axis labels, grids) is drawn once into a background; an
-  update restores that background, draws only the artists that can change (lines, images,
-  collections, patches, texts and legends inside the axes, titles, the suptitle, the spines
-  that a full draw paints over them) and sends the frame at once (``canvas.blit``): one frame per update, no round trip
-  and nothing drawn twice, so nothing flickers. When an axes' limits, position or the figure's
-  size or dpi have changed since the background was drawn, that update draws the whole figure
-  and takes a new background.
+  figure (axes backgrounds, ticks, tick and axis labels, grids) is drawn once into a
+  background; an update restores that background, draws only the artists that can change
+  (lines, images, collections, patches, texts and legends inside the axes, titles, the
+  suptitle, the spines that a full draw paints over them; unchanged ones are pasted from
+  sprites, see :class:`SpriteCache`) and sends the frame at once (``canvas.blit``): one frame
+  per update, no round trip, nothing drawn twice, so nothing flickers. When an axes' limits
+  or position, or the figure's size or dpi, have changed since the background was drawn,
+  that update draws the whole figure and takes a new background.
 
 A blitted frame is the same picture as a full draw (``tests/widgets/test_view.py`` compares
 their pixels for every explorer), except that grid lines are drawn under an axes' content

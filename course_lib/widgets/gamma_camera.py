@@ -13,9 +13,9 @@ pitch and the number of rings. Three panels:
   mouth that leave its back, from the exact lens-overlap model of
   :mod:`course_lib.gamma_camera` (``hole_pass_area``); the dotted circle is the exact cut-off
   ``d z / L + d / 2`` beyond which no straight ray passes;
-* **side view** (Q2(c)), a schematic not to scale: one hole, the two lines from the crystal behind its centre through the
-  edges of its mouth, and the patch of the source plane they span, ``R = d (L + z) / L`` by
-  similar triangles (the dashed lines are the extreme edge-to-edge rays).
+* **side view** (Q2(c)), a schematic not to scale: one hole, the two lines from the crystal
+  behind its centre through the edges of its mouth, and the patch of the source plane they
+  span, ``R = d (L + z) / L`` by similar triangles (the dashed lines are the extreme edge-to-edge rays).
 
 The readout compares the exam's open fraction (open holes' area over the face area) with the
 exact transmission (uniform over the face, as the exam assumes, and for an isotropic point

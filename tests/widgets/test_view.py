@@ -113,7 +113,8 @@ def test_a_changed_text_is_drawn_again_not_taken_from_its_sprite():
     view = _view.use_blitting(ex)
     ex.update()
     ex.iso.value = 0.3                                     # sprites of the unchanged artists
-    ex.index.value = 254
+    ex.index.value = 254                                   # corners change colour
+    assert view.blitter.blits == 2
     blitted = _pixels(ex.fig)
     FigureCanvasAgg.draw(ex.fig.canvas)
     assert np.abs(blitted - _pixels(ex.fig)).max() <= 8
