@@ -16,7 +16,9 @@ back for a frame). Of the approaches weighed:
   means a second drawing stack for six explorers, a new dependency in the students' wheel, and
   figures that no longer match the notebooks' static matplotlib figures;
 * smaller images while dragging trade sharpness for time and still pay for every tick label;
-* throttling only hides latency: the kernel handles one slider message at a time anyway;
+* throttling alone only hides latency (the kernel handles one slider message at a time
+  anyway), but dropping the frames that would pile up behind a drag keeps the picture with
+  the mouse, so the blitter does that too (:meth:`Blitter.redraw`);
 * **blitting** keeps matplotlib and ipympl and removes the waste, so it is what
   :class:`Blitter` does. The layout is solved once and then frozen; the static part of the
   figure (axes backgrounds, ticks, tick and axis labels, grids) is drawn once into a
@@ -35,7 +37,10 @@ their pixels for every explorer), except that grid lines are drawn under an axes
 
 from __future__ import annotations
 
+import asyncio
 import io
+import math
+import time
 import types
 
 import ipywidgets as W
@@ -78,6 +83,9 @@ class Blitter:
         self._own_draw = False
         self.full_draws = 0
         self.blits = 0
+        self._deferred = None              # the scheduled redraw, while frames are dropped
+        self._finished = -math.inf         # when the last frame was sent (perf_counter)
+        self._cost = 0.0                   # and how long it took to draw
         # explorers decide when to draw: no automatic draw_idle on every set_data (pyplot's
         # stale callback would make ipympl ask the browser for a second, full frame)
         fig.stale_callback = None
@@ -118,11 +126,35 @@ class Blitter:
         return out
 
     def redraw(self) -> None:
-        """Show the figure as it is now: blit when the background still fits, else draw all."""
+        """Show the figure as it is now: blit when the background still fits, else draw all.
+
+        While updates arrive faster than frames can be drawn (a drag, a held key), frames are
+        dropped rather than queued: when the last frame ended less than its own drawing time
+        ago, the redraw is put off until then on the kernel's event loop, and every update
+        that arrives meanwhile is shown by that one frame. Without a running event loop
+        (headless, the tests) every redraw happens at once.
+        """
+        if self._deferred is not None:
+            return  # the frame already scheduled will show this state too
+        wait = self._cost - (time.perf_counter() - self._finished)
+        loop = _running_loop() if wait > 0 else None
+        if loop is None:
+            self._redraw_now()
+        else:
+            self._deferred = loop.call_later(wait, self._redraw_deferred)
+
+    def _redraw_deferred(self):
+        self._deferred = None
+        self._redraw_now()
+
+    def _redraw_now(self):
+        start = time.perf_counter()
         if self.background is None or self.signature() != self._signature:
             self._draw_all()
         else:
             self._blit()
+        self._finished = time.perf_counter()
+        self._cost = self._finished - start
 
     def _draw_all(self):
         fig, canvas = self.fig, self.fig.canvas
@@ -178,6 +210,14 @@ class Blitter:
             fig.canvas.blit(fig.bbox)  # ipympl: sends this one frame to the browser now
         # else: no browser view yet. ipympl would keep the frame as the widget's initial
         # image, in a form its front-end cannot load; the view asks for a full draw anyway.
+
+
+def _running_loop():
+    """The running asyncio event loop (the kernel's, in a notebook), or ``None``."""
+    try:
+        return asyncio.get_running_loop()
+    except RuntimeError:
+        return None
 
 
 def _fast_diff_image(canvas):

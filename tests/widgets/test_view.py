@@ -185,3 +185,29 @@ def test_png_level_does_not_change_the_frame():
     np.testing.assert_array_equal(ours, theirs)
     assert math.prod(ours.shape[:2]) == math.prod(canvas.get_width_height(physical=True))
     plt.close(ex.fig)
+
+
+def test_updates_faster_than_frames_are_shown_by_one_later_frame():
+    """A drag: updates arrive back to back on the kernel's event loop. The frames that would
+    queue behind them are dropped and the one frame drawn afterwards shows the last state."""
+    import asyncio
+
+    ex = SplineEndExplorer()
+    view = _view.use_blitting(ex)
+    ex.update()                                            # no event loop: drawn at once
+    blitter = view.blitter
+    blitter._cost = 0.2                                    # as if a frame took 200 ms
+
+    async def drag():
+        for k in range(20):
+            ex.x.value = 0.5 + 0.05 * k
+            await asyncio.sleep(0)
+        assert blitter.full_draws + blitter.blits == 1     # nothing drawn yet: one is due
+        await asyncio.sleep(0.5)
+
+    asyncio.run(drag())
+    assert blitter.full_draws + blitter.blits == 2
+    shown = _pixels(ex.fig)
+    FigureCanvasAgg.draw(ex.fig.canvas)
+    assert np.abs(shown - _pixels(ex.fig)).max() <= 8      # the last state, nothing older
+    plt.close(ex.fig)
