@@ -134,14 +134,17 @@ class Blitter:
         that arrives meanwhile is shown by that one frame. Without a running event loop
         (headless, the tests) every redraw happens at once.
         """
-        if self._deferred is not None:
-            return  # the frame already scheduled will show this state too
-        wait = self._cost - (time.perf_counter() - self._finished)
-        loop = _running_loop() if wait > 0 else None
-        if loop is None:
-            self._redraw_now()
-        else:
-            self._deferred = loop.call_later(wait, self._redraw_deferred)
+        if self._deferred is None:
+            wait = self._cost - (time.perf_counter() - self._finished)
+            loop = _running_loop() if wait > 0 else None
+            if loop is None:
+                self._redraw_now()
+            else:
+                self._deferred = loop.call_later(wait, self._redraw_deferred)
+        # else: the frame already scheduled will show this state too. Either way the figure
+        # is taken care of: a stale figure would make pyplot's post_execute hook (run after
+        # every widget message) call draw_idle, and ipympl would then ask for a full redraw.
+        self.fig.stale = False
 
     def _redraw_deferred(self):
         self._deferred = None

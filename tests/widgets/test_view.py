@@ -211,3 +211,21 @@ def test_updates_faster_than_frames_are_shown_by_one_later_frame():
     FigureCanvasAgg.draw(ex.fig.canvas)
     assert np.abs(shown - _pixels(ex.fig)).max() <= 8      # the last state, nothing older
     plt.close(ex.fig)
+
+
+def test_a_blitted_figure_asks_pyplot_for_no_redraw():
+    """IPython runs pyplot's post_execute hook after every widget message; it redraws every
+    stale figure with draw_idle, which under ipympl means a full redraw asked by the browser.
+    A blitted explorer's figure is up to date, so it must not look stale."""
+    from matplotlib._pylab_helpers import Gcf
+
+    ex = PhongExplorer(size=64)
+    _view.use_blitting(ex)
+    calls = []
+    ex.fig.canvas.draw_idle = lambda *a, **k: calls.append(1)
+    for value in (10.0, 20.0, 30.0):
+        ex.light_azimuth.value = value
+        assert not ex.fig.stale
+        Gcf.draw_all()
+    assert calls == []
+    plt.close(ex.fig)
