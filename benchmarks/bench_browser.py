@@ -175,7 +175,8 @@ def write_notebook(path: Path, package: str, module: str, factory: str,
     path.write_text(json.dumps(nb))
 
 
-def _run_notebook(page, base: str, token: str, name: str) -> None:
+def run_notebook(page, base: str, token: str, name: str) -> None:
+    """Open notebook ``name`` in JupyterLab, run all its cells and wait for the figure."""
     page.goto(f"{base}/lab/tree/{name}?token={token}&reset")
     page.wait_for_selector(".jp-NotebookPanel .jp-Notebook .jp-Cell")
     page.locator(".jp-StatusBar-Widget", has_text="Idle").first.wait_for(timeout=120_000)
@@ -245,7 +246,7 @@ def measure_explorer(browser, base, token, root, package, spec, presses, extra_p
     page = context.new_page()
     page.set_default_timeout(60_000)
     try:
-        _run_notebook(page, base, token, name)
+        run_notebook(page, base, token, name)
         return measure_presses(page, description, key, presses)
     finally:
         _shut_down_kernels(page, base, token)

@@ -133,12 +133,12 @@ def test_phong_explorer_controls_change_figure(page, lab_server, artifacts):
 def test_each_key_press_brings_one_frame_and_the_light_follows(page, lab_server, artifacts):
     """Issue 15: a slider key gives exactly one new frame (nothing queued or flickering), and
     the explorer's readout shows the light direction of the slider's new azimuth."""
-    from benchmarks.bench_browser import _run_notebook, measure_presses, write_notebook
+    from benchmarks.bench_browser import run_notebook, measure_presses, write_notebook
     from course_lib.widgets.shading import direction
 
     base, token, root = lab_server
     write_notebook(root / "phong-keys.ipynb", "course_lib", "shading", "phong_explorer", None)
-    _run_notebook(page, base, token, "phong-keys.ipynb")
+    run_notebook(page, base, token, "phong-keys.ipynb")
     presses = measure_presses(page, "light azimuth°", "ArrowRight", 4)
     page.screenshot(path=str(artifacts / "phong-keys.png"))
     assert presses["missed"] == 0, presses
