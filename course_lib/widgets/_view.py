@@ -283,12 +283,15 @@ def _cacheable(artist) -> bool:
 class SpriteCache:
     """Pixels of unchanged artists, painted back instead of drawing them again.
 
-    Drawing text (tick-free, but titles, legends, labels) is most of what a blitted update
-    costs in Agg. An artist that has not changed since it was last drawn (matplotlib clears its
-    ``stale`` flag when it is drawn and sets it on every ``set_*``) is drawn once onto a
-    transparent canvas of the figure's size; the smallest rectangle holding its pixels is kept
-    and composited over the frame afterwards, which is the same "over" blend its own drawing
-    does. The cache lives as long as the background it was made for.
+    Drawing text (titles, legends, labels) is most of what a blitted update costs in Agg. An
+    artist that has not changed since it was last drawn (matplotlib clears its ``stale`` flag
+    when it is drawn and sets it on every ``set_*``) is drawn once onto a transparent canvas of
+    the figure's size; the smallest rectangle holding its pixels is kept and composited over
+    the frame afterwards, which is the same "over" blend its own drawing does. The cache lives
+    as long as the background it was made for. An explorer that changes an artist some other
+    way (a transform it mutates, an array edited in place) must call a ``set_*`` method too, or
+    set ``artist.stale = True``: the collimator's side view, which mutates its scaling, moves
+    every one of its artists with ``set_*`` on each update.
     """
 
     def __init__(self, renderer):
