@@ -5,7 +5,9 @@ right, bottom, top, near, far); a drop-down picks a vertex and four sliders move
 homogeneous coordinates ``[X, Y, Z, w]`` (so you can watch a vertex go behind the eye, ``w < 0``,
 and see the naive divide throw it in front). The left panel is 3-D screen space with the view
 volume and the plane being applied; the right panel looks along one screen axis. All artists are
-updated in place.
+updated in place; under ipympl the figure is blitted (:mod:`course_lib.widgets._view`, issue
+15): the 2-D panel's axes stay cached and the 3-D panel's contents are projected and drawn
+again over its cached panes and ticks.
 
 In JupyterLab run ``%matplotlib widget`` first, then::
 
@@ -24,6 +26,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from .. import clipping
 from ..plots.clipping import _closed, plot_clipping_2d, plot_view_volume, screen_points
+from ._view import FigureView
 
 #: A triangle that sticks out of the volume through four planes, w != 1 for two vertices.
 DEFAULT_POLYGON = np.array([
@@ -78,6 +81,7 @@ class ClippingExplorer:
         self.dims = tuple(dims)
         self.steps = clipping.clip_steps(self.P)
         self.last_update_ms = 0.0
+        self._view = FigureView()                  # ipympl: redrawn by blitting
         self._syncing = False
 
         with plt.ioff():
@@ -226,7 +230,7 @@ class ClippingExplorer:
         self.status.set_text(title)
         self.readout.value = self._table(current)
         self.last_update_ms = 1000 * (time.perf_counter() - t0)
-        self.fig.canvas.draw_idle()
+        self._view.redraw(self.fig)
 
     def _plane_line_2d(self, k):
         """The active plane seen edge-on in the 2-D panel (when it is perpendicular to it)."""

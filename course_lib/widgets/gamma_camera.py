@@ -13,9 +13,9 @@ pitch and the number of rings. Three panels:
   mouth that leave its back, from the exact lens-overlap model of
   :mod:`course_lib.gamma_camera` (``hole_pass_area``); the dotted circle is the exact cut-off
   ``d z / L + d / 2`` beyond which no straight ray passes;
-* **side view** (Q2(c)): one hole, the two lines from the crystal behind its centre through the
-  edges of its mouth, and the patch of the source plane they span, ``R = d (L + z) / L`` by
-  similar triangles (the dashed lines are the extreme edge-to-edge rays).
+* **side view** (Q2(c)), a schematic not to scale: one hole, the two lines from the crystal
+  behind its centre through the edges of its mouth, and the patch of the source plane they
+  span, ``R = d (L + z) / L`` by similar triangles (the dashed lines are the extreme edge-to-edge rays).
 
 The readout compares the exam's open fraction (open holes' area over the face area) with the
 exact transmission (uniform over the face, as the exam assumes, and for an isotropic point
@@ -26,6 +26,11 @@ open, 0.25 %.
 Every change calls :meth:`CollimatorExplorer.update`, which replaces the paths and colour values
 of the existing hole collections (``set_paths``, ``set_array``), moves the circles, rectangles
 and lines (``set_radius``, ``set_bounds``, ``set_data``) and redraws; no artist is created.
+With ipympl the redraw blits (:mod:`course_lib.widgets._view`): only what changed is drawn
+again. So that a move of ``d``, ``L`` or ``z`` never changes an axes' limits (which would mean
+redrawing the whole figure, ticks and all), the side view keeps its data in mm and fits them
+into fixed axes with one scaling (``side_limits`` holds the mm shown); it has no ticks, its
+labels give the sizes.
 
 In a notebook::
 
@@ -44,6 +49,7 @@ from matplotlib.collections import PatchCollection
 from matplotlib.colors import ListedColormap
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Rectangle
+from matplotlib.transforms import Affine2D
 
 from .. import gamma_camera as gc
 from ..plotting import COLOURS
@@ -203,9 +209,20 @@ class CollimatorExplorer(FigureExplorer):
             "z": ax.text(0, 0, "", ha="center", va="center", fontsize=9, bbox=box),
             "crystal": ax.text(0, 0, "crystal", ha="right", va="top", fontsize=9),
         }
-        ax.set_xlabel("lateral position (mm)")
-        ax.set_ylabel("distance from the collimator face (mm)")
+        ax.set_xlabel("lateral position")
+        ax.set_ylabel("distance from the collimator face")
         ax.set_title("Q2(c): one hole, side view (not to scale)", fontsize=9)
+        # The side view keeps its data in mm and fits them to fixed axes through one scaling
+        # (set by _update_side): its limits never change, so a slider move blits.
+        self._side_fit = Affine2D()
+        fitted = self._side_fit + ax.transData
+        for artist in (*septa, *rays, *extreme, bracket, crystal, face_line, source,
+                       *labels.values()):
+            artist.set_transform(fitted)
+        ax.set_xlim(-1.0, 1.0)
+        ax.set_ylim(0.0, 1.0)
+        ax.set_xticks([])
+        ax.set_yticks([])
         art["side"] = {"septa": septa, "rays": rays, "extreme": extreme, "bracket": bracket,
                        "crystal": crystal, "face": face_line, "source": source,
                        "labels": labels}
@@ -298,8 +315,10 @@ class CollimatorExplorer(FigureExplorer):
         lab["z"].set_text(f"z = {z:g} mm")
         lab["z"].set_position((0.0, z / 2))
         lab["crystal"].set_position((0.95 * span, -L - 0.01 * (L + z)))
-        self.ax_side.set_xlim(-span, span)
-        self.ax_side.set_ylim(-L - 0.12 * (L + z), top + 0.05 * (L + z))
+        self.side_limits = ((-span, span), (-L - 0.12 * (L + z), top + 0.05 * (L + z)))
+        (x0, x1), (y0, y1) = self.side_limits
+        self._side_fit.clear().translate(-x0, -y0).scale(2.0 / (x1 - x0), 1.0 / (y1 - y0))
+        self._side_fit.translate(-1.0, 0.0)
 
     def _readout_html(self, d, L, z, res) -> str:
         ratio = (res["exam_fraction"] / res["exact_fraction"]

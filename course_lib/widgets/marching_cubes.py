@@ -10,7 +10,8 @@ inside corner: the linear interpolation of Q3(a) (the table says *which* edge, t
 Choose a case three ways: Lorensen's number (one of the 15 classes, Q3(b)), the case index
 0 ... 255, or the eight corner toggles; the three stay in step. Every change calls
 :meth:`CaseExplorer.update`, which moves the existing artists (``set_verts`` on the triangles,
-marker colours on the corners) and redraws.
+marker colours on the corners) and redraws; under ipympl the redraw blits
+(:mod:`course_lib.widgets._view`, issue 15): the 3-D panes and ticks stay cached.
 
 In a notebook::
 

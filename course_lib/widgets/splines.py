@@ -10,6 +10,9 @@ the control points, and it writes the formulas of ``p``, ``p'`` and ``p''`` for 
 Control points move by dragging them on the figure (with ``%matplotlib widget``, i.e. ipympl)
 or, always, with the point selector and its two sliders. Every change calls :meth:`update`,
 which moves the existing artists (``set_data``, ``set_xy``, ``set_positions``) and redraws.
+Under ipympl the redraw blits (:mod:`course_lib.widgets._view`, issue 15): the axes, grid and
+ticks stay cached and the unchanged legend is pasted back, so a dragged point follows the
+mouse instead of waiting for a full matplotlib redraw.
 
 In a notebook::
 

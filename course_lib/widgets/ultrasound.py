@@ -3,7 +3,9 @@
 Built from explicit ipywidgets controls with ``.observe`` callbacks (no ``interact``): the
 figure is drawn once and :meth:`BScanExplorer.update` changes its artists in place
 (``AxesImage.set_data``, ``Line2D.set_data``, ``Text.set_text``). Works with the ipympl backend
-(``%matplotlib widget``) in JupyterLab and headless with Agg.
+(``%matplotlib widget``) in JupyterLab and headless with Agg. Under ipympl the figure is
+blitted (:mod:`course_lib.widgets._view`, issue 15): axes, ticks and labels stay cached, and
+only the image, the outlines, the A-lines and the title are drawn again.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import numpy as np
 
 from .. import ultrasound as us
 from ..plots import ultrasound as uplots
+from ._view import FigureView
 
 
 class BScanExplorer:
@@ -86,13 +89,10 @@ class BScanExplorer:
             w.observe(self._on_change, names="value")
         left = widgets.VBox(self.controls[:3] + [self.freq])
         right = widgets.VBox(self.controls[3:6] + [self.tgc])
-        canvas = self.fig.canvas
-        if isinstance(canvas, widgets.DOMWidget):  # ipympl
-            self.output = None
-            view = canvas
-        else:  # inline / Agg: show a static copy in an Output widget
-            self.output = widgets.Output()
-            view = self.output
+        self._view = FigureView()                  # ipympl: the canvas, redrawn by blitting
+        view = self._view.widget(self.fig)
+        self.output = self._view.output
+        if self.output is not None:  # inline / Agg: show a static copy in an Output widget
             self._show_static()
         self.widget = widgets.VBox([widgets.HBox([left, right]), view])
 
@@ -159,7 +159,7 @@ class BScanExplorer:
             line.set_data(depth, self._aline(env, x, xc))
         self._write_summary()
         if self.output is None:
-            self.fig.canvas.draw_idle()
+            self._view.redraw(self.fig)
         else:
             self._show_static()
 

@@ -128,3 +128,22 @@ def test_phong_explorer_controls_change_figure(page, lab_server, artifacts):
     readout.first.wait_for(timeout=20_000)
     assert re.search(r"0\.69[89]", readout.first.inner_text())
     out.screenshot(path=str(artifacts / "q5-explorer-exam.png"))
+
+
+def test_each_key_press_brings_one_frame_and_the_light_follows(page, lab_server, artifacts):
+    """Issue 15: a slider key gives exactly one new frame (nothing queued or flickering), and
+    the explorer's readout shows the light direction of the slider's new azimuth."""
+    from benchmarks.bench_browser import run_notebook, measure_presses, write_notebook
+    from course_lib.widgets.shading import direction
+
+    base, token, root = lab_server
+    write_notebook(root / "phong-keys.ipynb", "course_lib", "shading", "phong_explorer", None)
+    run_notebook(page, base, token, "phong-keys.ipynb")
+    presses = measure_presses(page, "light azimuth°", "ArrowRight", 4)
+    page.screenshot(path=str(artifacts / "phong-keys.png"))
+    assert presses["missed"] == 0, presses
+    assert presses["frames"] == [1, 1, 1, 1], presses
+    # four steps of 0.5 degrees from the default azimuth of -45
+    readout = page.locator(".widget-html", has_text="L = (").first.inner_text()
+    shown = [float(x) for x in re.search(r"L = \(([^)]*)\)", readout).group(1).split(",")]
+    np.testing.assert_allclose(shown, direction(-43.0, 35.0), atol=6e-4)

@@ -1,0 +1,231 @@
+"""Blitted redraws (issue 15): the same picture as a full draw, and one frame per update.
+
+The oracle is matplotlib's own full Agg draw of the same figure: after a few slider moves
+redrawn by :class:`course_lib.widgets._view.Blitter`, the canvas must hold the pixels that
+``FigureCanvasAgg.draw`` paints from scratch. The ipympl checks build the real ipympl canvas
+(no browser): the frame it would send decodes to exactly the pixels that changed, and no frame
+goes out before a browser view exists.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+
+import matplotlib
+import numpy as np
+import pytest
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
+from PIL import Image  # noqa: E402
+
+from course_lib.widgets import _view  # noqa: E402
+from course_lib.widgets.clipping import ClippingExplorer  # noqa: E402
+from course_lib.widgets.gamma_camera import CollimatorExplorer  # noqa: E402
+from course_lib.widgets.marching_cubes import CaseExplorer  # noqa: E402
+from course_lib.widgets.shading import PhongExplorer  # noqa: E402
+from course_lib.widgets.splines import SplineEndExplorer  # noqa: E402
+from course_lib.widgets.ultrasound import BScanExplorer  # noqa: E402
+
+#: explorer, then the (control attribute, new value) moves applied one update at a time
+MOVES = {
+    "phong": (PhongExplorer, [("light_azimuth", 10.0), ("ka", 0.5), ("colour", "#ff3300"),
+                              ("view_elevation", 20.0)]),
+    "splines": (SplineEndExplorer, [("x", 1.0), ("y", 0.5), ("rule", "d=c"),
+                                    ("kind", "b-spline")]),
+    "bscan": (BScanExplorer, [("c_fat", 1500.0), ("t_liver", 30.0), ("tgc", True)]),
+    "collimator": (CollimatorExplorer, [("z", 500.0), ("d", 2.0), ("L", 80.0)]),
+    "clipping": (ClippingExplorer, [("step", 3), ("step", 5)]),
+    "cases": (CaseExplorer, [("iso", 0.3), ("index", 5), ("index", 176), ("iso", 0.6)]),
+}
+
+
+def _control(explorer, name):
+    return getattr(explorer, name)
+
+
+def _pixels(fig) -> np.ndarray:
+    return np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(np.int16).copy()
+
+
+@pytest.fixture(params=sorted(MOVES))
+def driven(request):
+    cls, moves = MOVES[request.param]
+    explorer = cls()
+    view = _view.use_blitting(explorer)
+    explorer.update()
+    yield request.param, explorer, view, moves
+    plt.close(explorer.fig)
+
+
+def test_blitted_frames_match_a_full_draw(driven):
+    name, explorer, view, moves = driven
+    for attr, value in moves:
+        _control(explorer, attr).value = value
+        blitted = _pixels(explorer.fig)
+        FigureCanvasAgg.draw(explorer.fig.canvas)            # the oracle: everything, from scratch
+        full = _pixels(explorer.fig)
+        differs = np.abs(blitted - full).max(axis=-1) > 8
+        assert differs.mean() < 1e-4, f"{name} after {attr}={value!r}: {differs.sum()} pixels differ"
+    assert view.blitter.blits >= 1, f"{name}: no update was blitted"
+
+
+def test_a_blit_draws_no_tick_label(driven):
+    """What a blit paints is the changing artists only: no axis (ticks, tick labels) at all."""
+    name, explorer, view, moves = driven
+    for artist in view.blitter.dynamic_artists():
+        assert not isinstance(artist, matplotlib.axis.Axis), name
+
+
+def test_axes_limits_change_means_a_full_draw():
+    ex = CollimatorExplorer()
+    view = _view.use_blitting(ex)
+    ex.update()
+    ex.z.value = 600.0                                     # side view only: fixed limits
+    assert (view.blitter.full_draws, view.blitter.blits) == (1, 1)
+    ex.pitch.value = 15.0                                  # the face grows: new limits
+    assert view.blitter.full_draws == 2
+    lim = 1.08 * (ex.n_rings.value + 1) * 15.0
+    assert ex.ax_exam.get_xlim() == pytest.approx((-lim, lim))
+    plt.close(ex.fig)
+
+
+def test_collimator_side_view_fits_its_mm_into_fixed_axes():
+    ex = CollimatorExplorer()
+    for d, L, z in ((1.0, 40.0, 1000.0), (3.0, 120.0, 80.0)):
+        ex.set(d=d, L=L, z=z)
+        assert ex.ax_side.get_xlim() == (-1.0, 1.0) and ex.ax_side.get_ylim() == (0.0, 1.0)
+        (x0, x1), (y0, y1) = ex.side_limits
+        to_axes = ex.art["side"]["source"].get_transform() - ex.ax_side.transData
+        np.testing.assert_allclose(to_axes.transform([(x0, y0), (x1, y1)]), [(-1, 0), (1, 1)],
+                                   atol=1e-12)
+        # the source sits at height z in mm, inside the shown range
+        _, (zs,) = ex.art["side"]["source"].get_data()
+        assert zs == pytest.approx(z) and y0 < zs < y1
+    plt.close(ex.fig)
+
+
+def test_a_changed_text_is_drawn_again_not_taken_from_its_sprite():
+    ex = CaseExplorer(index=1)
+    view = _view.use_blitting(ex)
+    ex.update()
+    ex.iso.value = 0.3                                     # sprites of the unchanged artists
+    ex.index.value = 254                                   # corners change colour
+    assert view.blitter.blits == 2
+    blitted = _pixels(ex.fig)
+    FigureCanvasAgg.draw(ex.fig.canvas)
+    assert np.abs(blitted - _pixels(ex.fig)).max() <= 8
+    plt.close(ex.fig)
+
+
+# --- the ipympl canvas ------------------------------------------------------------------------
+
+def _on_ipympl(explorer):
+    """Put ``explorer.fig`` on ipympl's canvas and record the frames it sends."""
+    from ipympl import backend_nbagg
+
+    backend_nbagg._Backend_ipympl.new_figure_manager_given_figure(4242, explorer.fig)
+    canvas = explorer.fig.canvas
+    frames = []
+    canvas.send = lambda content=None, buffers=None: frames.append(buffers) if buffers else None
+    return canvas, frames
+
+
+def _decode(png: bytes) -> np.ndarray:
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGBA"))
+
+
+def test_no_frame_before_a_browser_view_then_one_frame_per_update():
+    ex = PhongExplorer(size=64)
+    canvas, frames = _on_ipympl(ex)
+    ex.set(ka=0.4)
+    assert frames == [] and canvas._data_url is None      # no view yet: nothing sent
+    canvas._handle_message(canvas, {"type": "initialized"}, [])
+    canvas._handle_message(canvas, {"type": "draw"}, [])  # the view's first full frame
+    first = len(frames)
+    ex.light_azimuth.value = 30.0
+    ex.ks.value = 0.3
+    assert len(frames) == first + 2                        # one frame per update, no more
+    assert ex._view.blitter.blits >= 1          # the first after the view's own draw is full
+    plt.close(ex.fig)
+
+
+def test_sent_diff_frame_holds_exactly_the_changed_pixels():
+    ex = PhongExplorer(size=64)
+    canvas, frames = _on_ipympl(ex)
+    canvas._handle_message(canvas, {"type": "initialized"}, [])
+    ex.set(ka=0.25)
+    before = np.asarray(canvas.buffer_rgba()).copy()
+    ex.light_azimuth.value = 40.0
+    after = np.asarray(canvas.buffer_rgba()).copy()
+    assert canvas._current_image_mode == "diff"
+    sent = _decode(bytes(frames[-1][0]))
+    changed = np.any(after != before, axis=-1)
+    assert changed.any()
+    np.testing.assert_array_equal(sent[changed], after[changed])
+    assert not sent[~changed].any()                        # unchanged pixels: transparent
+    plt.close(ex.fig)
+
+
+def test_png_level_does_not_change_the_frame():
+    """Our level-1 PNG decodes to what matplotlib's own encoder sends."""
+    from matplotlib.backends.backend_webagg_core import FigureCanvasWebAggCore
+
+    ex = PhongExplorer(size=64)
+    canvas, frames = _on_ipympl(ex)
+    canvas._handle_message(canvas, {"type": "initialized"}, [])
+    ex.set(kd=0.3)
+    canvas._png_is_old, canvas._force_full = True, True
+    ours = _decode(_view._fast_diff_image(canvas))
+    canvas._png_is_old, canvas._force_full = True, True
+    theirs = _decode(FigureCanvasWebAggCore.get_diff_image(canvas))
+    np.testing.assert_array_equal(ours, theirs)
+    assert math.prod(ours.shape[:2]) == math.prod(canvas.get_width_height(physical=True))
+    plt.close(ex.fig)
+
+
+def test_updates_faster_than_frames_are_shown_by_one_later_frame():
+    """A drag: updates arrive back to back on the kernel's event loop. The frames that would
+    queue behind them are dropped and the one frame drawn afterwards shows the last state."""
+    import asyncio
+
+    ex = SplineEndExplorer()
+    view = _view.use_blitting(ex)
+    ex.update()                                            # no event loop: drawn at once
+    blitter = view.blitter
+    blitter._cost = 0.2                                    # as if a frame took 200 ms
+
+    async def drag():
+        for k in range(20):
+            ex.x.value = 0.5 + 0.05 * k
+            await asyncio.sleep(0)
+        assert blitter.full_draws + blitter.blits == 1     # nothing drawn yet: one is due
+        await asyncio.sleep(0.5)
+
+    asyncio.run(drag())
+    assert blitter.full_draws + blitter.blits == 2
+    shown = _pixels(ex.fig)
+    FigureCanvasAgg.draw(ex.fig.canvas)
+    assert np.abs(shown - _pixels(ex.fig)).max() <= 8      # the last state, nothing older
+    plt.close(ex.fig)
+
+
+def test_a_blitted_figure_asks_pyplot_for_no_redraw():
+    """IPython runs pyplot's post_execute hook after every widget message; it redraws every
+    stale figure with draw_idle, which under ipympl means a full redraw asked by the browser.
+    A blitted explorer's figure is up to date, so it must not look stale."""
+    from matplotlib._pylab_helpers import Gcf
+
+    ex = PhongExplorer(size=64)
+    _view.use_blitting(ex)
+    calls = []
+    ex.fig.canvas.draw_idle = lambda *a, **k: calls.append(1)
+    for value in (10.0, 20.0, 30.0):
+        ex.light_azimuth.value = value
+        assert not ex.fig.stale
+        Gcf.draw_all()
+    assert calls == []
+    plt.close(ex.fig)
