@@ -40,7 +40,8 @@ pytestmark = [
 ]
 #: modules students may read as source (package markers and the answer *format* checker)
 READABLE = {"course_lib/__init__.py", "course_lib/plots/__init__.py",
-            "course_lib/widgets/__init__.py", "course_lib/answers.py"}
+            "course_lib/widgets/__init__.py", "course_lib/answers.py",
+            "course_lib/variants.py"}
 
 
 @pytest.fixture(scope="module")

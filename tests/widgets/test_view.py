@@ -30,6 +30,16 @@ from course_lib.widgets.shading import PhongExplorer  # noqa: E402
 from course_lib.widgets.splines import SplineEndExplorer  # noqa: E402
 from course_lib.widgets.ultrasound import BScanExplorer  # noqa: E402
 
+
+@pytest.fixture(autouse=True)
+def headless(monkeypatch):
+    """No kernel event loop, as in a plain Python process: every redraw happens at once.
+
+    Earlier tests in the same worker (the browser tests' Playwright session) may leave an
+    asyncio loop marked running in this thread; the explorers would then defer frames onto it.
+    The one test of deferring runs its own loop in a thread of its own."""
+    monkeypatch.setattr(_view, "_running_loop", lambda: None)
+
 #: explorer, then the (control attribute, new value) moves applied one update at a time
 MOVES = {
     "phong": (PhongExplorer, [("light_azimuth", 10.0), ("ka", 0.5), ("colour", "#ff3300"),
@@ -187,6 +197,22 @@ def test_png_level_does_not_change_the_frame():
     plt.close(ex.fig)
 
 
+def _running_loop_of_this_thread():
+    import asyncio
+
+    try:
+        return asyncio.get_running_loop()
+    except RuntimeError:
+        return None
+
+
+def _record(fn, failed: list) -> None:
+    try:
+        fn()
+    except BaseException as exc:  # noqa: BLE001 - reported by the test's thread
+        failed.append(repr(exc))
+
+
 def test_updates_faster_than_frames_are_shown_by_one_later_frame():
     """A drag: updates arrive back to back on the kernel's event loop. The frames that would
     queue behind them are dropped and the one frame drawn afterwards shows the last state."""
@@ -205,7 +231,18 @@ def test_updates_faster_than_frames_are_shown_by_one_later_frame():
         assert blitter.full_draws + blitter.blits == 1     # nothing drawn yet: one is due
         await asyncio.sleep(0.5)
 
-    asyncio.run(drag())
+    def kernel():                                          # a loop of its own, as a kernel's
+        asyncio.run(drag())
+
+    import threading
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(_view, "_running_loop", _running_loop_of_this_thread)
+        failed = []
+        thread = threading.Thread(target=lambda: _record(kernel, failed))
+        thread.start()
+        thread.join(30)
+    assert not failed, failed
     assert blitter.full_draws + blitter.blits == 2
     shown = _pixels(ex.fig)
     FigureCanvasAgg.draw(ex.fig.canvas)
