@@ -201,8 +201,26 @@ def typed_version(nb: dict, student: str) -> dict:
         except ValueError:          # not a student id (the grader skips such folders)
             return nb
         answer = answer.tolist() if isinstance(answer, np.ndarray) else answer
-        cell["source"] = f"{ex.name} = {answer!r}\n"
+        cell["source"] = _retyped(text, ex.name, f"{ex.name} = {answer!r}")
     return nb
+
+
+def _retyped(text: str, name: str, typed: str) -> str:
+    """``text`` with its last top-level assignment to ``name`` replaced by ``typed`` (the rest
+    of the cell, e.g. an attack's helper code, stays); the whole cell when it does not parse."""
+    import ast
+
+    try:
+        tree = ast.parse(text)
+    except SyntaxError:
+        return typed + "\n"
+    found = [n for n in tree.body if isinstance(n, ast.Assign)
+             and any(isinstance(t, ast.Name) and t.id == name for t in n.targets)]
+    if not found:
+        return typed + "\n"
+    lines = text.splitlines()
+    node = found[-1]
+    return "\n".join(lines[:node.lineno - 1] + [typed] + lines[node.end_lineno:]) + "\n"
 
 
 def write_nb(path: Path, nb, type_answers: bool = True) -> None:
