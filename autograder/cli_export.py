@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 from .course import DEFAULT_COURSE_ROOT, default_db_url
+from .outputs.gradebook_url import MissingDriver, resolve_db_url
 from .grade.sources import default_sources, load_source
 from .outputs import export
 
@@ -59,7 +60,12 @@ def main(args: argparse.Namespace) -> int:
         return 2
     maxima = {s.name: sum(p for *_, p in s.graded) + sum(p for _, p in s.manual)
               for s in map(load_source, default_sources())}
-    rows = export.read_gradebook(args.db_url or default_db_url(root), list(maxima))
+    try:
+        db_url = resolve_db_url(args.db_url or default_db_url(root))
+    except (MissingDriver, ValueError) as exc:
+        print(f"error: --db-url: {exc}", file=sys.stderr)
+        return 2
+    rows = export.read_gradebook(db_url, list(maxima))
     waiting = export.unmarked(rows)
     if waiting:
         shown = ", ".join(waiting[:LISTED]) + (f" and {len(waiting) - LISTED} more"

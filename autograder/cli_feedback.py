@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 from .course import DEFAULT_COURSE_ROOT, default_db_url
+from .outputs.gradebook_url import MissingDriver, resolve_db_url
 from .outputs import handback
 
 
@@ -38,7 +39,11 @@ def main(args: argparse.Namespace) -> int:
         print(f"error: run `python -m autograder grade` first: no {root / 'autograded'} or "
               f"no {args.grading}", file=sys.stderr)
         return 2
-    db_url = args.db_url or default_db_url(root)
+    try:
+        db_url = resolve_db_url(args.db_url or default_db_url(root))
+    except (MissingDriver, ValueError) as exc:
+        print(f"error: --db-url: {exc}", file=sys.stderr)
+        return 2
     marks = handback.read_marks(db_url)
     written, unchanged = handback.write_pages(marks, Path(args.grading), root)
     print(f"feedback: {written} pages written, {unchanged} unchanged, in {root / 'feedback'}",
