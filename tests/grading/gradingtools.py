@@ -191,7 +191,7 @@ def typed_version(nb: dict, student: str) -> dict:
                      if n in REGISTRY and REGISTRY[n].kind in ("choice", "value")]
             ex = REGISTRY.get(_meta(cell).get("grade_id", "") or (named[-1] if named else ""))
             computed = ex is not None and ex.kind in ("choice", "value") \
-                and "mine." in _src_text(cell)
+                and "mine." in text and not _types(text, ex.name)
         except (AttributeError, TypeError):
             continue
         if not computed:
@@ -203,6 +203,18 @@ def typed_version(nb: dict, student: str) -> dict:
         answer = answer.tolist() if isinstance(answer, np.ndarray) else answer
         cell["source"] = _retyped(text, ex.name, f"{ex.name} = {answer!r}")
     return nb
+
+
+def _types(text: str, name: str) -> bool:
+    """Whether the last top-level assignment to ``name`` in ``text`` is a literal already."""
+    import ast
+
+    try:
+        found = [n for n in ast.parse(text).body if isinstance(n, ast.Assign)
+                 and any(isinstance(t, ast.Name) and t.id == name for t in n.targets)]
+        return bool(found) and ast.literal_eval(found[-1].value) is not None
+    except (SyntaxError, ValueError, TypeError):
+        return False
 
 
 def _retyped(text: str, name: str, typed: str) -> str:
