@@ -24,13 +24,11 @@ import importlib
 import math
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
-from .harness import REPO, Row
+from .harness import Row, timed_grade
 
 SECTION = "cluster"
 SUBMISSIONS = 24
@@ -48,18 +46,11 @@ def _submit(submitted: Path, notebooks: list[Path], n: int) -> None:
 
 def _grade(work: Path, name: str, *how: str) -> tuple[float, str]:
     """Seconds of one ``grade`` run, and its ``grades.csv``."""
-    from autograder.course import nbgrader_env
 
     out = work / name
     cmd = [sys.executable, "-m", "autograder", "grade", str(work / "submitted"), "--out",
            str(out), "--secret-file", str(work / "secret"), "--quiet", "--no-gradebook", *how]
-    t0 = time.perf_counter()
-    proc = subprocess.run(cmd, cwd=REPO, env=nbgrader_env(), capture_output=True, text=True,
-                          timeout=TIMEOUT_S, check=False)
-    elapsed = time.perf_counter() - t0
-    if proc.returncode != 0:
-        tail = (proc.stderr or proc.stdout).strip().splitlines()[-1:] or ["no output"]
-        raise RuntimeError(f"{name}: exit {proc.returncode}: {tail[0][:160]}")
+    elapsed = timed_grade(cmd, TIMEOUT_S, name)
     return elapsed, (out / "grades.csv").read_text(encoding="utf-8")
 
 

@@ -25,13 +25,12 @@ import csv
 import math
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-from .harness import REPO, Row
+from .harness import Row, timed_grade
 
 SECTION = "grading"
 STUDENTS = 4
@@ -77,7 +76,6 @@ def _nbgrader(course, students) -> tuple[float, str]:
 
 
 def _ours(course, students, jobs: int, work: Path) -> tuple[float, str]:
-    from autograder.course import nbgrader_env
 
     out = work / f"out-jobs{jobs}"
     secret = work / "secret"
@@ -86,13 +84,7 @@ def _ours(course, students, jobs: int, work: Path) -> tuple[float, str]:
     cmd = [sys.executable, "-m", "autograder", "grade", str(course.root / "submitted"),
            "--out", str(out), "--jobs", str(jobs), "--secret-file", str(secret),
            "--source", str(course.source_dir), "--quiet"]
-    t0 = time.perf_counter()
-    proc = subprocess.run(cmd, cwd=REPO, env=nbgrader_env(), capture_output=True, text=True,
-                          timeout=TIMEOUT_S, check=False)
-    elapsed = time.perf_counter() - t0
-    if proc.returncode != 0:
-        tail = (proc.stderr or proc.stdout).strip().splitlines()[-1:] or ["no output"]
-        raise RuntimeError(f"exit {proc.returncode}: {tail[0][:120]}")
+    elapsed = timed_grade(cmd, TIMEOUT_S)
     with open(out / "grades.csv", newline="", encoding="utf-8") as f:
         rows = [r for r in csv.DictReader(f) if r["score"] not in ("", None)]
     graded = {r["student"] for r in rows}

@@ -42,6 +42,22 @@ class Row:
         return self.ours / self.peer
 
 
+def timed_grade(cmd: list[str], timeout: float, label: str = "") -> float:
+    """Seconds of one ``python -m autograder grade`` run (``cmd``), from the repository with
+    nbgrader's environment; ``RuntimeError`` with the last line of output when it fails."""
+    from autograder.course import nbgrader_env
+
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, cwd=REPO, env=nbgrader_env(), capture_output=True, text=True,
+                          timeout=timeout, check=False)
+    elapsed = time.perf_counter() - t0
+    if proc.returncode != 0:
+        tail = (proc.stderr or proc.stdout).strip().splitlines()[-1:] or ["no output"]
+        prefix = f"{label}: " if label else ""
+        raise RuntimeError(f"{prefix}exit {proc.returncode}: {tail[0][:160]}")
+    return elapsed
+
+
 def time_call(fn, repeat: int = 5, warmup: int = 1) -> dict:
     """Median and 95th percentile wall time of ``fn()`` in milliseconds."""
     for _ in range(warmup):
