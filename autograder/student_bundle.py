@@ -48,7 +48,8 @@ DIST_NAME = "4f9-course-student"
 SHIPPED_AS_SOURCE = ("course_lib.answers", "course_lib.variants")
 #: the instructors' requirements a student's environment needs (versions come from our own
 #: package metadata, so the two never disagree)
-STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "jupyterlab", "nbgrader")
+STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "anywidget", "jupyterlab",
+                        "nbgrader")
 SETUP_SCRIPT = Path(__file__).with_name("student_setup.py")
 #: nbgrader's instructor tools: off in ``make lab``'s student view and, through the wheel's
 #: Jupyter config files (:func:`student_jupyter_config`), wherever the wheel is installed
@@ -324,7 +325,8 @@ def student_readme(wheel_name: str = "4f9_course_student-*.whl") -> str:
 
 This folder holds the course library the six question notebooks (`tripos2006/q1_imaging.ipynb`
 to `q6_clipping.ipynb`) import: the figures, the interactive explorers and the tables they
-give you. It also brings JupyterLab, ipywidgets, ipympl and nbgrader's Validate button.
+give you. It also brings JupyterLab, ipywidgets, ipympl, anywidget (the explorers' figures)
+and nbgrader's Validate button.
 
 ## Install (once)
 

@@ -45,6 +45,8 @@ TARGET_MS = 100.0
 PRESSES = 30
 SMOKE_PRESSES = 3
 SETTLE_MS = 400
+#: the figure's canvas: the browser-painted one (``FigureCanvas``) or, before it, ipympl's
+CANVAS = "canvas.course-figure-canvas, .jupyter-matplotlib-canvas-div canvas"
 PRESS_TIMEOUT_MS = 5000
 
 #: ``(module, factory, slider description, key)``: the control each explorer is driven by.
@@ -182,7 +184,7 @@ def run_notebook(page, base: str, token: str, name: str) -> None:
     page.locator(".jp-StatusBar-Widget", has_text="Idle").first.wait_for(timeout=120_000)
     page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
     page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
-    page.locator(".jupyter-matplotlib-canvas-div canvas").first.wait_for(timeout=120_000)
+    page.locator(CANVAS).first.wait_for(timeout=120_000)
 
 
 def _slider_handle(page, description: str):
@@ -197,7 +199,7 @@ def measure_presses(page, description: str, key: str, presses: int) -> dict:
     Returns ``{"latencies": [ms, ...], "frames": [changed frames per press], "missed": n}``
     (a press whose canvas did not change within ``PRESS_TIMEOUT_MS`` is missed).
     """
-    canvas = page.locator(".jupyter-matplotlib-canvas-div canvas").first
+    canvas = page.locator(CANVAS).first
     canvas.scroll_into_view_if_needed()
     time.sleep(2.0)                                   # the first frames, fonts, caches
     page.evaluate("src => { window.__benchMeasure = (0, eval)('(' + src + ')'); }",

@@ -1,38 +1,36 @@
-"""The figure of an explorer as a widget, and how it is redrawn after each update.
+"""The figure of an explorer as a widget, and how it is redrawn after each update (issue 15).
 
-With ipympl (``%matplotlib widget``) the figure's canvas *is* a widget. With the inline backend
-(or Agg, headless) it is not: the figure is drawn into an :class:`ipywidgets.Output` instead,
-which is cleared and refilled on each redraw.
+An explorer's figure is shown by a :class:`~course_lib.widgets._canvas.FigureCanvas`, a
+``<canvas>`` widget that the browser paints, and redrawn by a :class:`ScenePainter`.
 
-Why explorers blit (issue 15)
------------------------------
-Measured in Chromium through JupyterLab, a key press on a slider took 130-300 ms to reach the
-screen although the maths of an update costs 0.3-17 ms: nearly all of it was matplotlib
-redrawing the *whole* figure with Agg (ticks, tick labels, legends, titles, the constrained
-layout solver), plus ipympl's round trip (``draw_idle`` asks the browser, which asks the kernel
-back for a frame). Of the approaches weighed:
+Why the browser paints (issue 15)
+---------------------------------
+Measured in Chromium through JupyterLab, a key press on a slider took 130-400 ms to reach the
+screen with ipympl, although the maths of an update costs 1-30 ms: matplotlib redrew the whole
+figure with Agg (ticks, tick labels, legends, the constrained-layout solver), and ipympl then
+encoded it as a PNG, sent it, and the page decoded it. Of the approaches weighed:
 
-* a client-side widget library (anywidget with a canvas, bqplot) would answer fastest, but it
-  means a second drawing stack for six explorers, a new dependency in the students' wheel, and
-  figures that no longer match the notebooks' static matplotlib figures;
-* smaller images while dragging trade sharpness for time and still pay for every tick label;
-* throttling alone only hides latency (the kernel handles one slider message at a time
-  anyway), but dropping the frames that would pile up behind a drag keeps the picture with
-  the mouse, so the blitter does that too (:meth:`Blitter.redraw`);
-* **blitting** keeps matplotlib and ipympl and removes the waste, so it is what
-  :class:`Blitter` does. The layout is solved once and then frozen; the static part of the
-  figure (axes backgrounds, ticks, tick and axis labels, grids) is drawn once into a
-  background; an update restores that background, draws only the artists that can change
-  (lines, images, collections, patches, texts and legends inside the axes, titles, the
-  suptitle, the spines that a full draw paints over them; unchanged ones are pasted from
-  sprites, see :class:`SpriteCache`) and sends the frame at once (``canvas.blit``): one frame
-  per update, no round trip, nothing drawn twice, so nothing flickers. When an axes' limits
-  or position, or the figure's size or dpi, have changed since the background was drawn,
-  that update draws the whole figure and takes a new background.
+* **blitting** (:class:`Blitter`): solve the layout once, keep the static part of the figure
+  (axes, ticks, tick and axis labels, grids) as a background, and draw only the artists that
+  can change. It halved the latency, but rasterising those artists and the PNG round trip of
+  the larger figures still cost 100-180 ms at the 90th percentile;
+* smaller images while dragging trade sharpness for time and change the picture while moving;
+* throttling alone only hides latency; dropping the frames that would pile up behind a drag
+  keeps the picture with the mouse, so :meth:`Blitter.redraw` does that;
+* **painting on the client**, fed by ``course_lib``'s numbers. A second plotting library
+  (bqplot, a hand-written canvas per explorer) would mean six figures drawn twice, unlike the
+  notebooks' static matplotlib figures. Instead :class:`ScenePainter` keeps matplotlib as the
+  one description of every figure and replaces only its rasteriser: the background is drawn by
+  Agg when the geometry changes, and each update records the changing artists with a
+  :class:`~course_lib.widgets._scene.SceneRenderer` (paths, markers, glyph outlines and images
+  in display pixels) and sends that scene, a few kB, to the page, which paints background and
+  scene in one task: one frame per update, nothing half drawn.
 
-A blitted frame is the same picture as a full draw (``tests/widgets/test_view.py`` compares
-their pixels for every explorer), except that grid lines are drawn under an axes' content
-(``axisbelow``) in both.
+:class:`Blitter` remains the base of :class:`ScenePainter` (the split into background and
+changing artists, the frozen layout, frame dropping) and, through :func:`use_blitting`, redraws
+a figure's own Agg canvas headless: ``tests/widgets/test_view.py`` checks on it that the split
+is complete (a blitted frame is the same picture as a full draw, for every explorer), which is
+what the browser's picture relies on.
 """
 
 from __future__ import annotations
@@ -41,7 +39,6 @@ import asyncio
 import io
 import math
 import time
-import types
 
 import ipywidgets as W
 import numpy as np
@@ -49,15 +46,14 @@ from PIL import Image
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg
 from matplotlib.collections import Collection
+from matplotlib.image import AxesImage
 from matplotlib.legend import Legend
 from matplotlib.patches import Patch
 from matplotlib.layout_engine import PlaceHolderLayoutEngine
 
-__all__ = ["Blitter", "FigureExplorer", "FigureView", "use_blitting"]
+from ._scene import SceneRenderer, pack
 
-
-def _is_ipympl(canvas) -> bool:
-    return isinstance(canvas, W.DOMWidget)
+__all__ = ["Blitter", "FigureExplorer", "FigureView", "ScenePainter", "use_blitting"]
 
 
 class Blitter:
@@ -66,7 +62,7 @@ class Blitter:
     Parameters
     ----------
     fig : matplotlib.figure.Figure
-        A figure on an Agg-based canvas (ipympl's, or plain Agg).
+        A figure on an Agg canvas.
 
     Notes
     -----
@@ -87,14 +83,12 @@ class Blitter:
         self._finished = -math.inf         # when the last frame was sent (perf_counter)
         self._cost = 0.0                   # and how long it took to draw
         # explorers decide when to draw: no automatic draw_idle on every set_data (pyplot's
-        # stale callback would make ipympl ask the browser for a second, full frame)
+        # stale callback would draw the whole figure again)
         fig.stale_callback = None
         for ax in fig.axes:
             if ax.name != "3d":
                 ax.set_axisbelow(True)
         fig.canvas.mpl_connect("draw_event", self._on_draw_event)
-        if _is_ipympl(fig.canvas) and hasattr(fig.canvas, "_last_buff"):
-            fig.canvas.get_diff_image = types.MethodType(_fast_diff_image, fig.canvas)
 
     def _on_draw_event(self, _event):
         if not self._own_draw:  # a draw from elsewhere (resize, dpi ratio): start again
@@ -142,8 +136,8 @@ class Blitter:
             else:
                 self._deferred = loop.call_later(wait, self._redraw_deferred)
         # else: the frame already scheduled will show this state too. Either way the figure
-        # is taken care of: a stale figure would make pyplot's post_execute hook (run after
-        # every widget message) call draw_idle, and ipympl would then ask for a full redraw.
+        # is taken care of: a stale figure would make pyplot's post_execute hook call
+        # draw_idle, a full redraw.
         self.fig.stale = False
 
     def _redraw_deferred(self):
@@ -209,10 +203,137 @@ class Blitter:
                 if sprites is not None:  # changed: its old pixels are no longer its own
                     sprites.forget(a)
                 fig.draw_artist(a)
-        if not getattr(fig.canvas, "syncing_data_url", False):
-            fig.canvas.blit(fig.bbox)  # ipympl: sends this one frame to the browser now
-        # else: no browser view yet. ipympl would keep the frame as the widget's initial
-        # image, in a form its front-end cannot load; the view asks for a full draw anyway.
+        fig.canvas.blit(fig.bbox)
+
+
+class ScenePainter(Blitter):
+    """Redraws a figure in the browser: Agg draws the static background (when the geometry
+    changes), the changing artists go to the page as a vector scene (issue 15).
+
+    Same split and the same frame dropping as :class:`Blitter`, but nothing is rasterised in
+    the kernel after the first frame: each update records the dynamic artists with a
+    :class:`~course_lib.widgets._scene.SceneRenderer` (an unchanged artist's items are kept
+    from the frame before) and sends them to a :class:`~course_lib.widgets._canvas.FigureCanvas`,
+    whose page paints them over the background in one JavaScript task.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    canvas_widget : FigureCanvas
+        The widget the frames go to; its mouse messages come back as matplotlib events.
+    """
+
+    def __init__(self, fig, canvas_widget):
+        _plain_agg_canvas(fig)
+        super().__init__(fig)
+        self.widget = canvas_widget
+        self._base_dpi = float(fig.dpi)
+        self._renderer = None
+        self._kept: dict[int, tuple] = {}
+        self._background_png = None
+        canvas_widget.on_msg(self._on_msg)
+
+    def _draw_all(self):
+        fig, canvas = self.fig, self.fig.canvas
+        self._freeze_layout()
+        dynamic = [a for a in self.dynamic_artists() if a.get_visible()]
+        for a in dynamic:
+            a.set_visible(False)
+        self._own_draw = True
+        try:
+            FigureCanvasAgg.draw(canvas)
+        finally:
+            self._own_draw = False
+            for a in dynamic:
+                a.set_visible(True)
+        renderer = canvas.get_renderer()
+        for ax in fig.axes:  # a hidden title is placed as if it were not there: place it again
+            if hasattr(ax, "_update_title_position"):
+                ax._update_title_position(renderer)
+        with io.BytesIO() as png:
+            Image.fromarray(np.asarray(renderer.buffer_rgba())).save(
+                png, format="png", compress_level=1)
+            self._background_png = png.getvalue()
+        self.background = True
+        self._renderer = SceneRenderer(renderer)
+        self._kept.clear()
+        self._signature = self.signature()
+        self.full_draws += 1
+        self._paint(dynamic, new_background=True)
+
+    def _blit(self):
+        self.blits += 1
+        self._paint(self.dynamic_artists())
+
+    def _paint(self, artists, sprites=None, new_background=False):
+        scene = self._renderer
+        items = []
+        for a in artists:
+            if not a.get_visible():
+                continue
+            kept = self._kept.get(id(a))
+            if kept is not None and kept[0] is a and not a.stale and _cacheable(a):
+                items.extend(kept[1])
+                continue
+            scene.items = []
+            if isinstance(a, AxesImage):
+                scene.draw_axes_image(a)  # at its own resolution: the browser scales it
+            else:
+                a.draw(scene)
+            self._kept[id(a)] = (a, scene.items)
+            items.extend(scene.items)
+        width, height = (int(round(v)) for v in self.fig.bbox.size)
+        self.widget.show(scene=pack(items, scene.clips, scene.height), size=(width, height),
+                         background=self._background_png if new_background else None)
+
+    # -- messages from the page -------------------------------------------------------------
+    def _on_msg(self, _widget, content, _buffers):
+        if not isinstance(content, dict):
+            return
+        if content.get("type") == "ratio":
+            self._set_ratio(content.get("ratio"))
+        elif content.get("type") == "mouse":
+            self._mouse(content)
+
+    def _set_ratio(self, ratio):
+        try:
+            ratio = float(ratio)
+        except (TypeError, ValueError):
+            return
+        if not (0.5 <= ratio <= 4) or ratio == self.widget.ratio:
+            return
+        self.widget.ratio = ratio
+        self.fig.set_dpi(self._base_dpi * ratio)
+        self.redraw()
+
+    def _mouse(self, content):
+        from matplotlib.backend_bases import MouseButton, MouseEvent
+
+        name = content.get("name")
+        if name not in ("button_press_event", "motion_notify_event", "button_release_event"):
+            return
+        try:
+            x, y = float(content["x"]), float(content["y"])
+            button = MouseButton(int(content.get("button", 1)))
+        except (KeyError, TypeError, ValueError):
+            return
+        event = MouseEvent(name, self.fig.canvas, x, y, button=button)
+        self.fig.canvas.callbacks.process(name, event)
+        if self.fig.stale:  # e.g. a 3-D axes turned by the drag: show it
+            self.redraw()
+
+
+def _plain_agg_canvas(fig) -> None:
+    """Give ``fig`` a plain Agg canvas when it has another one (ipympl's, under
+    ``%matplotlib widget``): that canvas is a widget of its own, whose page asks the kernel
+    for full redraws, and which would start drawing the figure if it were ever displayed.
+    It is closed (its page model goes away); callbacks live on the figure and stay."""
+    old = fig.canvas
+    if type(old) is FigureCanvasAgg:
+        return
+    FigureCanvasAgg(fig)
+    if isinstance(old, W.Widget):
+        old.close()
 
 
 def _running_loop():
@@ -221,30 +342,6 @@ def _running_loop():
         return asyncio.get_running_loop()
     except RuntimeError:
         return None
-
-
-def _fast_diff_image(canvas):
-    """Matplotlib's ``FigureCanvasWebAggCore.get_diff_image`` (the frame ipympl sends: the
-    pixels changed since the last frame, the others transparent), PNG-compressed at level 1
-    instead of zlib's default 6: a third less time per frame, a few kB more to send."""
-    if not canvas._png_is_old:
-        return None
-    pixels = np.asarray(canvas.get_renderer().buffer_rgba())
-    buff = pixels.view(np.uint32).squeeze(2)
-    if (canvas._force_full or buff.shape != canvas._last_buff.shape
-            or (pixels[:, :, 3] != 255).any()):
-        canvas.set_image_mode("full")
-        output = buff
-    else:
-        canvas.set_image_mode("diff")
-        output = np.where(buff != canvas._last_buff, buff, 0)
-    canvas._last_buff = buff.copy()
-    canvas._force_full = False
-    canvas._png_is_old = False
-    data = output.view(dtype=np.uint8).reshape((*output.shape, 4))
-    with io.BytesIO() as png:
-        Image.fromarray(data).save(png, format="png", compress_level=1)
-        return png.getvalue()
 
 
 def _view_3d(ax) -> tuple:
@@ -334,48 +431,37 @@ class SpriteCache:
 class FigureView:
     """Shows one figure in an explorer's layout and redraws it after each update.
 
+    By default the figure is a :class:`~course_lib.widgets._canvas.FigureCanvas` widget that
+    the browser paints, redrawn by a :class:`ScenePainter` (issue 15): a static background
+    drawn by Agg now and then, and the changing artists as vector scenes.
+
     Parameters
     ----------
-    blit : bool or None
-        Redraw with a :class:`Blitter`. ``None`` (the default): with ipympl, where the frame
-        goes to a browser. Plain Agg (headless, the tests) keeps matplotlib's own full draw
-        unless ``blit=True``.
+    blit : bool
+        ``True``: redraw the figure's own Agg canvas with a :class:`Blitter` instead, and show
+        nothing (headless: the tests and benchmarks of the Agg redraw use it through
+        :func:`use_blitting`).
     """
 
-    def __init__(self, blit: bool | None = None):
-        self.output: W.Output | None = None
+    def __init__(self, blit: bool = False):
+        self.blit = bool(blit)
+        self.blitter: Blitter | None = None      # the Blitter or ScenePainter that redraws
         self._widget = None
-        self.blit = blit
-        self.blitter: Blitter | None = None
 
     def widget(self, fig):
-        """The widget to place in the layout: the ipympl canvas, or an Output to draw into."""
+        """The widget to place in the layout: the figure's browser canvas."""
         if self._widget is None:
-            if _is_ipympl(fig.canvas):
-                self._widget = fig.canvas
-            else:  # inline backend: redraw the figure into an Output widget
-                self.output = self._widget = W.Output()
+            from ._canvas import FigureCanvas
+
+            self._widget = FigureCanvas()
         return self._widget
 
-    def _use_blitter(self, fig) -> bool:
-        if self.blit is None:
-            return _is_ipympl(fig.canvas)
-        return bool(self.blit) and isinstance(fig.canvas, FigureCanvasAgg)
-
     def redraw(self, fig) -> None:
-        """Redraw ``fig``: blitted (ipympl), in place (Agg) or into the Output widget (inline)."""
-        if self._use_blitter(fig):
-            if self.blitter is None or self.blitter.fig is not fig:
-                self.blitter = Blitter(fig)
-            self.blitter.redraw()
-        elif self.output is not None:
-            from IPython.display import display
-
-            with self.output:
-                self.output.clear_output(wait=True)
-                display(fig)
-        else:
-            fig.canvas.draw_idle()
+        """Show ``fig`` as it is now (in the browser canvas, or on its Agg canvas with
+        ``blit=True``)."""
+        if self.blitter is None or self.blitter.fig is not fig:
+            self.blitter = Blitter(fig) if self.blit else ScenePainter(fig, self.widget(fig))
+        self.blitter.redraw()
 
 
 class FigureExplorer:
@@ -412,8 +498,8 @@ class FigureExplorer:
 
 
 def use_blitting(explorer) -> FigureView:
-    """Make ``explorer`` redraw by blitting whatever its canvas, plain Agg included (the tests
-    and ``benchmarks/bench_widgets.py`` measure the browser's redraw path headless this way).
+    """Make ``explorer`` redraw its own Agg canvas by blitting (the tests and
+    ``benchmarks/bench_widgets.py`` measure that redraw headless this way).
 
     Returns the new :class:`FigureView`; its ``blitter`` counts full draws and blits.
     """
@@ -422,7 +508,6 @@ def use_blitting(explorer) -> FigureView:
         explorer._figure_view = view
     elif hasattr(explorer, "_view"):  # the B-scan and clipping explorers hold their own view
         explorer._view = view
-        explorer.output = None  # redraw the figure itself, not a static copy in an Output
     else:
         raise ValueError(f"explorer: {type(explorer).__name__} has no figure view to replace")
     return view

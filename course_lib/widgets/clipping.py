@@ -81,7 +81,7 @@ class ClippingExplorer:
         self.dims = tuple(dims)
         self.steps = clipping.clip_steps(self.P)
         self.last_update_ms = 0.0
-        self._view = FigureView()                  # ipympl: redrawn by blitting
+        self._view = FigureView()                  # painted by the browser (issue 15)
         self._syncing = False
 
         with plt.ioff():
@@ -259,19 +259,16 @@ class ClippingExplorer:
     # -- display -------------------------------------------------------------------------------
 
     def widget(self):
-        """The controls and the figure in one box (with ipympl the canvas is itself a widget)."""
-        if isinstance(self.fig.canvas, widgets.DOMWidget):
-            return widgets.VBox([self.controls, self.fig.canvas])
-        return self.controls                       # inline/Agg: the figure is shown as an image
+        """The controls and the figure (painted by the browser) in one box."""
+        if self.__dict__.get("_layout") is None:
+            self._layout = widgets.VBox([self.controls, self._view.widget(self.fig)])
+            self._view.redraw(self.fig)
+        return self._layout
 
     def _ipython_display_(self):
         from IPython.display import display
 
-        if isinstance(self.fig.canvas, widgets.DOMWidget):
-            display(self.widget())
-        else:                                           # inline/Agg: controls + a static image
-            display(self.controls)
-            display(self.fig)
+        display(self.widget())
 
 
 def clipping_explorer(P=None, dims=(0, 1)) -> ClippingExplorer:

@@ -268,12 +268,19 @@ class CollimatorExplorer(FigureExplorer):
 
         radius = hole_draw_radius(d, pitch, n)
         lim = 1.08 * Rf
+        # the holes' outlines change with d, the pitch and the rings only (not with L or z)
+        outline = (pitch, n, radius)
+        circles = None
+        if outline != getattr(self, "_outline", None):
+            self._outline = outline
+            circles = [Circle(tuple(c), radius) for c in self.holes]
         for key, ax, values in (("exam", self.ax_exam, self.exam_open),
                                 ("exact", self.ax_exact, self.exact_share)):
             a = self.art[key]
             a["face"].set_radius(Rf)
-            # PatchCollection.set_paths takes patches and stores their paths (no new artist)
-            a["holes"].set_paths([Circle(tuple(c), radius) for c in self.holes])
+            if circles is not None:
+                # PatchCollection.set_paths takes patches and stores their paths (no new artist)
+                a["holes"].set_paths(circles)
             a["holes"].set_array(values)
             a["cutoffs"][0].set_radius(res["cutoff_exam"])
             a["cutoffs"][1].set_radius(res["cutoff_exact"])

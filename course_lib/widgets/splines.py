@@ -189,8 +189,8 @@ class SplineEndExplorer(FigureExplorer):
         update_curve(self.art, self.scene)
         rule = self.rule.value
         self.ax.set_title(f"{_KIND_TITLE[self.kind.value]}, end rule {_RULE_TITLE[rule]}")
+        self._redraw()  # the figure first: the page typesets the formulas after painting it
         self.formulas.value = formulas_html(self.kind.value, rule, self.scene["end"])
-        self._redraw()
 
     def get_point(self, index):
         """Control point ``index`` (0 .. m-1), or ``"start"`` / ``"end"`` for a free phantom."""

@@ -89,12 +89,10 @@ class BScanExplorer:
             w.observe(self._on_change, names="value")
         left = widgets.VBox(self.controls[:3] + [self.freq])
         right = widgets.VBox(self.controls[3:6] + [self.tgc])
-        self._view = FigureView()                  # ipympl: the canvas, redrawn by blitting
+        self._view = FigureView()                  # painted by the browser (issue 15)
         view = self._view.widget(self.fig)
-        self.output = self._view.output
-        if self.output is not None:  # inline / Agg: show a static copy in an Output widget
-            self._show_static()
         self.widget = widgets.VBox([widgets.HBox([left, right]), view])
+        self._view.redraw(self.fig)                # the first frame
 
     # ---------------------------------------------------------------------------------------
     @property
@@ -158,25 +156,10 @@ class BScanExplorer:
         for line, xc in zip(self.a_lines, (self._gap_x(phantom), self._liver_x(phantom))):
             line.set_data(depth, self._aline(env, x, xc))
         self._write_summary()
-        if self.output is None:
-            self._view.redraw(self.fig)
-        else:
-            self._show_static()
+        self._view.redraw(self.fig)
 
     def _on_change(self, change):
         self.update()
-
-    def _show_static(self):
-        try:
-            from IPython import get_ipython
-            from IPython.display import display
-        except ImportError:  # pragma: no cover
-            return
-        if get_ipython() is None:
-            return
-        with self.output:
-            self.output.clear_output(wait=True)
-            display(self.fig)
 
     def _ipython_display_(self):
         from IPython.display import display

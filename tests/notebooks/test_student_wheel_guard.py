@@ -76,7 +76,7 @@ def test_wheel_requirements_match_pyproject():
     import tomllib
 
     declared = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["dependencies"]
-    wanted = {"numpy", "matplotlib", "ipywidgets", "ipympl", "jupyterlab", "nbgrader"}
+    wanted = {"numpy", "matplotlib", "ipywidgets", "ipympl", "anywidget", "jupyterlab", "nbgrader"}
     from packaging.requirements import Requirement
 
     expected = {Requirement(r).name: Requirement(r).specifier for r in declared

@@ -2,15 +2,14 @@
 
 The oracle is matplotlib's own full Agg draw of the same figure: after a few slider moves
 redrawn by :class:`course_lib.widgets._view.Blitter`, the canvas must hold the pixels that
-``FigureCanvasAgg.draw`` paints from scratch. The ipympl checks build the real ipympl canvas
-(no browser): the frame it would send decodes to exactly the pixels that changed, and no frame
-goes out before a browser view exists.
+``FigureCanvasAgg.draw`` paints from scratch, which shows that the split into a background and
+changing artists (the browser canvas' too) misses nothing. The browser canvas' checks (no
+browser): one frame per update, a new background only for a new geometry, mouse messages
+turned into matplotlib events.
 """
 
 from __future__ import annotations
 
-import io
-import math
 
 import matplotlib
 import numpy as np
@@ -20,7 +19,6 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
-from PIL import Image  # noqa: E402
 
 from course_lib.widgets import _view  # noqa: E402
 from course_lib.widgets.clipping import ClippingExplorer  # noqa: E402
@@ -131,70 +129,40 @@ def test_a_changed_text_is_drawn_again_not_taken_from_its_sprite():
     plt.close(ex.fig)
 
 
-# --- the ipympl canvas ------------------------------------------------------------------------
+# --- the browser canvas ------------------------------------------------------------------------
 
-def _on_ipympl(explorer):
-    """Put ``explorer.fig`` on ipympl's canvas and record the frames it sends."""
-    from ipympl import backend_nbagg
-
-    backend_nbagg._Backend_ipympl.new_figure_manager_given_figure(4242, explorer.fig)
-    canvas = explorer.fig.canvas
-    frames = []
-    canvas.send = lambda content=None, buffers=None: frames.append(buffers) if buffers else None
-    return canvas, frames
-
-
-def _decode(png: bytes) -> np.ndarray:
-    return np.asarray(Image.open(io.BytesIO(png)).convert("RGBA"))
-
-
-def test_no_frame_before_a_browser_view_then_one_frame_per_update():
+def test_one_frame_per_update_and_the_background_only_when_the_geometry_changes():
     ex = PhongExplorer(size=64)
-    canvas, frames = _on_ipympl(ex)
-    ex.set(ka=0.4)
-    assert frames == [] and canvas._data_url is None      # no view yet: nothing sent
-    canvas._handle_message(canvas, {"type": "initialized"}, [])
-    canvas._handle_message(canvas, {"type": "draw"}, [])  # the view's first full frame
-    first = len(frames)
+    assert ex.widget is not None                           # the layout, shown as it is
+    canvas = ex._view.widget(ex.fig)
+    painter = ex._view.blitter
+    assert painter.full_draws == 1 and canvas.background[:4] == b"\x89PNG"
+    background, frame = canvas.background, canvas.frame
     ex.light_azimuth.value = 30.0
     ex.ks.value = 0.3
-    assert len(frames) == first + 2                        # one frame per update, no more
-    assert ex._view.blitter.blits >= 1          # the first after the view's own draw is full
+    assert canvas.frame == frame + 2                       # one frame per update, no more
+    assert painter.full_draws == 1 and canvas.background is background
+    width, height = ex.fig.get_size_inches()
+    ex.fig.set_size_inches(width + 1, height)              # new geometry: a new background
+    ex._redraw()
+    assert painter.full_draws == 2 and canvas.background != background
+    assert canvas.width == round(ex.fig.bbox.width) > round(width * ex.fig.dpi)
     plt.close(ex.fig)
 
 
-def test_sent_diff_frame_holds_exactly_the_changed_pixels():
-    ex = PhongExplorer(size=64)
-    canvas, frames = _on_ipympl(ex)
-    canvas._handle_message(canvas, {"type": "initialized"}, [])
-    ex.set(ka=0.25)
-    before = np.asarray(canvas.buffer_rgba()).copy()
-    ex.light_azimuth.value = 40.0
-    after = np.asarray(canvas.buffer_rgba()).copy()
-    assert canvas._current_image_mode == "diff"
-    sent = _decode(bytes(frames[-1][0]))
-    changed = np.any(after != before, axis=-1)
-    assert changed.any()
-    np.testing.assert_array_equal(sent[changed], after[changed])
-    assert not sent[~changed].any()                        # unchanged pixels: transparent
-    plt.close(ex.fig)
-
-
-def test_png_level_does_not_change_the_frame():
-    """Our level-1 PNG decodes to what matplotlib's own encoder sends."""
-    from matplotlib.backends.backend_webagg_core import FigureCanvasWebAggCore
-
-    ex = PhongExplorer(size=64)
-    canvas, frames = _on_ipympl(ex)
-    canvas._handle_message(canvas, {"type": "initialized"}, [])
-    ex.set(kd=0.3)
-    canvas._png_is_old, canvas._force_full = True, True
-    ours = _decode(_view._fast_diff_image(canvas))
-    canvas._png_is_old, canvas._force_full = True, True
-    theirs = _decode(FigureCanvasWebAggCore.get_diff_image(canvas))
-    np.testing.assert_array_equal(ours, theirs)
-    assert math.prod(ours.shape[:2]) == math.prod(canvas.get_width_height(physical=True))
-    plt.close(ex.fig)
+def test_mouse_messages_become_matplotlib_events():
+    ex = SplineEndExplorer()
+    assert ex.widget is not None
+    canvas, fig = ex._view.widget(ex.fig), ex.fig
+    seen = []
+    fig.canvas.mpl_connect("button_press_event", lambda e: seen.append((e.x, e.y, e.inaxes)))
+    x, y = fig.axes[0].transData.transform((0.0, 0.0))
+    canvas._handle_custom_msg({"type": "mouse", "name": "button_press_event", "x": x, "y": y,
+                               "button": 1}, [])
+    canvas._handle_custom_msg({"type": "mouse", "name": "no_such_event", "x": x, "y": y}, [])
+    canvas._handle_custom_msg({"type": "mouse", "name": "button_press_event", "x": "?"}, [])
+    assert seen == [(int(x), int(y), fig.axes[0])]       # matplotlib keeps whole pixels
+    plt.close(fig)
 
 
 def _running_loop_of_this_thread():

@@ -1,0 +1,253 @@
+"""The explorers' figure in the browser: a ``<canvas>`` that paints the kernel's scenes.
+
+:class:`FigureCanvas` is an `anywidget <https://anywidget.dev>`_ widget (JupyterLab, Notebook 7,
+VS Code, Colab). The kernel sends it two things (issue 15):
+
+* ``background``: a PNG of the figure without its changing artists (axes, ticks, labels,
+  grids), drawn by Agg when the figure's geometry changes (rarely: a new axis range);
+* ``scene``: every changing artist as vector paths, markers and images in display pixels
+  (:mod:`course_lib.widgets._scene`), sent after each update, a few kB.
+
+The page paints the background and then the scene in one JavaScript task, so the browser never
+shows a half-drawn frame; a scene that arrives before a new background is decoded waits for it.
+Mouse presses, drags and releases on the canvas go back to the kernel as matplotlib mouse
+events (the spline explorer's draggable points use them). The canvas has ``devicePixelRatio``
+times as many pixels as its CSS size, so figures are sharp on high-density screens.
+"""
+
+from __future__ import annotations
+
+import anywidget
+import traitlets
+
+__all__ = ["FigureCanvas"]
+
+_ESM = r"""
+const MOVETO = 1, LINETO = 2, CURVE3 = 3, CURVE4 = 4, CLOSEPOLY = 79;
+
+function unpack(view) {
+  const bytes = new Uint8Array(view.buffer, view.byteOffset, view.byteLength);
+  if (bytes.length < 8 || String.fromCharCode(...bytes.subarray(0, 4)) !== "4F9S") return null;
+  const dv = new DataView(view.buffer, view.byteOffset, view.byteLength);
+  const n = dv.getUint32(4, true);
+  const header = JSON.parse(new TextDecoder().decode(bytes.subarray(8, 8 + n)));
+  let offset = 8 + n;
+  const nv = header.nv;
+  const V = new Float32Array(bytes.slice(offset, offset + 8 * nv).buffer);
+  offset += 8 * nv;
+  const C = bytes.slice(offset, offset + nv);
+  offset += nv + ((4 - (nv % 4)) % 4);
+  header.V = V; header.C = C; header.images = bytes.subarray(offset);
+  return header;
+}
+
+// A Path2D of vertices [start, start + count) of (V, C); y -> y0 + sy * y.
+function tracePath(V, C, ref, y0, sy) {
+  const p = new Path2D();
+  const [start, count] = ref;
+  const end = start + count;
+  for (let i = start; i < end;) {
+    const c = C[i], x = V[2 * i], y = y0 + sy * V[2 * i + 1];
+    if (c === MOVETO) { p.moveTo(x, y); i += 1; }
+    else if (c === LINETO) { p.lineTo(x, y); i += 1; }
+    else if (c === CURVE3 && i + 1 < end) {
+      p.quadraticCurveTo(x, y, V[2 * i + 2], y0 + sy * V[2 * i + 3]); i += 2;
+    } else if (c === CURVE4 && i + 2 < end) {
+      p.bezierCurveTo(x, y, V[2 * i + 2], y0 + sy * V[2 * i + 3],
+                      V[2 * i + 4], y0 + sy * V[2 * i + 5]); i += 3;
+    } else if (c === CLOSEPOLY) { p.closePath(); i += 1; }
+    else { i += 1; }
+  }
+  return p;
+}
+
+function hatchPattern(ctx, scene, hatch, cache) {
+  const key = JSON.stringify(hatch);
+  if (!cache.has(key)) {
+    const size = Math.max(1, Math.round(hatch.size));
+    const tile = document.createElement("canvas");
+    tile.width = tile.height = size;
+    const t = tile.getContext("2d");
+    t.strokeStyle = hatch.color || "black";
+    t.lineWidth = hatch.lw;
+    t.stroke(tracePath(scene.V, scene.C, hatch.v, size, -1));
+    cache.set(key, ctx.createPattern(tile, "repeat"));
+  }
+  return cache.get(key);
+}
+
+function applyClip(ctx, scene, index, H) {
+  if (index === null || index === undefined) return;
+  const clip = scene.clips[index];
+  if (clip.rect) {
+    const [x, y, w, h] = clip.rect;
+    const r = new Path2D();
+    r.rect(x, H - y - h, w, h);
+    ctx.clip(r);
+  }
+  if (clip.v) ctx.clip(tracePath(scene.V, scene.C, clip.v, H, -1));
+}
+
+function paintShape(ctx, scene, item, shape, hatches) {
+  if (item.fill) { ctx.fillStyle = item.fill; ctx.fill(shape); }
+  if (item.hatch) { ctx.fillStyle = hatchPattern(ctx, scene, item.hatch, hatches); ctx.fill(shape); }
+  if (item.stroke && item.lw > 0) {
+    ctx.strokeStyle = item.stroke;
+    ctx.lineWidth = item.lw;
+    ctx.lineCap = item.cap;
+    ctx.lineJoin = item.join;
+    if (item.dash) { ctx.lineDashOffset = item.dash[0]; ctx.setLineDash(item.dash.slice(1)); }
+    else ctx.setLineDash([]);
+    ctx.stroke(shape);
+  }
+}
+
+function paintScene(ctx, scene, scratch, hatches) {
+  const H = scene.height;
+  for (const item of scene.items) {
+    ctx.save();
+    applyClip(ctx, scene, item.clip, H);
+    if (item.k === "path") {
+      paintShape(ctx, scene, item, tracePath(scene.V, scene.C, item.v, H, -1), hatches);
+    } else if (item.k === "markers") {
+      const marker = tracePath(scene.V, scene.C, item.v, 0, -1);
+      const [start, count] = item.at;
+      for (let i = start; i < start + count; i++) {
+        ctx.setTransform(1, 0, 0, 1, scene.V[2 * i], H - scene.V[2 * i + 1]);
+        paintShape(ctx, scene, item, marker, hatches);
+      }
+    } else if (item.k === "image") {
+      const size = item.w * item.h * 4;
+      const data = new Uint8ClampedArray(scene.images.slice(item.o, item.o + size).buffer);
+      scratch.width = item.w; scratch.height = item.h;
+      scratch.getContext("2d").putImageData(new ImageData(data, item.w, item.h), 0, 0);
+      const [a, b, c, d, e, f] = item.m;      // image pixels -> display -> canvas (y down)
+      ctx.setTransform(a, -b, c, -d, e, H - f);
+      ctx.imageSmoothingEnabled = item.smooth;
+      ctx.imageSmoothingQuality = "high";
+      ctx.drawImage(scratch, 0, 0);
+    }
+    ctx.restore();
+  }
+}
+
+function render({ model, el }) {
+  const canvas = document.createElement("canvas");
+  canvas.className = "course-figure-canvas";
+  canvas.style.display = "block";
+  canvas.style.touchAction = "none";
+  el.classList.add("course-figure");
+  el.appendChild(canvas);
+  const ctx = canvas.getContext("2d");
+  const scratch = document.createElement("canvas");
+  const hatches = new Map();
+  let background = null, backgroundBytes = null, loading = null;
+
+  function paint() {
+    const bytes = model.get("background");
+    if (bytes !== backgroundBytes) {       // a new background: decode it, then paint
+      backgroundBytes = bytes;
+      if (!bytes || bytes.byteLength === 0) { background = null; loading = null; return paint(); }
+      const blob = new Blob([new Uint8Array(bytes.buffer, bytes.byteOffset, bytes.byteLength)],
+                            {type: "image/png"});
+      const mine = loading = createImageBitmap(blob).then((bitmap) => {
+        if (loading !== mine) return;
+        background = bitmap; loading = null; paint();
+      }).catch(() => {
+        if (loading === mine) { loading = null; background = null; paint(); }
+      });
+      return;
+    }
+    if (loading) return;                   // the frame waits for its background
+    const tStart = performance.now();
+    const scene = unpack(model.get("scene"));
+    const ratio = model.get("ratio") || 1;
+    const w = model.get("width"), h = model.get("height");
+    if (canvas.width !== w || canvas.height !== h) {
+      canvas.width = w; canvas.height = h;
+      canvas.style.width = `${w / ratio}px`; canvas.style.height = `${h / ratio}px`;
+    }
+    ctx.setTransform(1, 0, 0, 1, 0, 0);
+    ctx.clearRect(0, 0, w, h);
+    if (background) ctx.drawImage(background, 0, 0);
+    if (scene) paintScene(ctx, scene, scratch, hatches);
+    canvas.dataset.frame = String(model.get("frame"));
+    (window.__cfT ||= []).push([tStart, performance.now()]);
+  }
+
+  // the mouse, as matplotlib events (display pixels from the bottom-left corner)
+  let pressed = false, pendingMove = null;
+  const where = (e) => {
+    const r = canvas.getBoundingClientRect();
+    const sx = canvas.width / r.width, sy = canvas.height / r.height;
+    return [(e.clientX - r.left) * sx, canvas.height - (e.clientY - r.top) * sy];
+  };
+  const send = (name, e, button) => {     // one drag move per animation frame at most
+    const [x, y] = where(e);
+    model.send({type: "mouse", name, x, y, button: button || e.button + 1});
+  };
+  canvas.addEventListener("pointerdown", (e) => {
+    pressed = true; canvas.setPointerCapture(e.pointerId); send("button_press_event", e);
+  });
+  canvas.addEventListener("pointermove", (e) => {
+    if (!pressed) return;
+    if (pendingMove === null) requestAnimationFrame(() => {
+      const ev = pendingMove; pendingMove = null;
+      if (ev) send("motion_notify_event", ev, 1);
+    });
+    pendingMove = e;
+  });
+  const release = (e) => {
+    if (!pressed) return;
+    pressed = false; pendingMove = null; send("button_release_event", e);
+  };
+  canvas.addEventListener("pointerup", release);
+  canvas.addEventListener("pointercancel", release);
+
+  model.on("change:scene", paint);
+  model.on("change:background", paint);
+  model.on("change:ratio", paint);
+  paint();
+  const ratio = window.devicePixelRatio || 1;
+  if (ratio !== model.get("ratio")) model.send({type: "ratio", ratio});
+  return () => { model.off("change:scene", paint); model.off("change:background", paint); };
+}
+
+export default { render };
+"""
+
+
+class FigureCanvas(anywidget.AnyWidget):
+    """A figure painted in the browser: a PNG ``background`` plus a vector ``scene`` on top.
+
+    Attributes
+    ----------
+    width, height : int
+        The canvas' size in pixels (the figure's size at its dpi).
+    ratio : float
+        Canvas pixels per CSS pixel (the page's ``devicePixelRatio``, reported by the page).
+    background : bytes
+        PNG of the figure's static part.
+    scene : bytes
+        The changing artists, packed by :func:`course_lib.widgets._scene.pack`.
+    frame : int
+        Counts the frames sent (shown by the page as the canvas' ``data-frame``).
+    """
+
+    _esm = _ESM
+    _css = ".course-figure { line-height: 0; }"
+    width = traitlets.Int(0).tag(sync=True)
+    height = traitlets.Int(0).tag(sync=True)
+    ratio = traitlets.Float(1.0).tag(sync=True)
+    background = traitlets.Bytes(b"").tag(sync=True)
+    scene = traitlets.Bytes(b"").tag(sync=True)
+    frame = traitlets.Int(0).tag(sync=True)
+
+    def show(self, *, scene: bytes, size: tuple[int, int], background: bytes | None = None):
+        """Send one frame (and a new background, if given) in one message."""
+        with self.hold_sync():
+            self.width, self.height = int(size[0]), int(size[1])
+            if background is not None:
+                self.background = background
+            self.scene = scene
+            self.frame += 1

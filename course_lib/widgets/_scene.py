@@ -1,0 +1,374 @@
+"""A matplotlib renderer that records what it draws as a scene for the browser to paint.
+
+Issue 15: the explorers' figures answer a slider within a frame or two when the browser, not
+the kernel, turns their changing artists into pixels. :class:`SceneRenderer` is a matplotlib
+renderer like Agg's, except that ``draw_path``, ``draw_markers`` and ``draw_image`` record
+their geometry, already in display pixels, instead of rasterising it: matplotlib (and so
+``course_lib``'s numbers behind every artist) still decides what is drawn and where, and a
+``<canvas>`` in the page (:mod:`course_lib.widgets._canvas`) paints the recorded scene over the
+figure's static background. Text is recorded as the outlines of its glyphs (matplotlib's
+``TextToPath``, the way its PDF and SVG backends can), placed with Agg's own text metrics, so
+labels sit where a full Agg draw puts them.
+
+A scene is a list of items, one per primitive::
+
+    {"k": "path", "v": vertices (n, 2) float32, "c": codes (n,) uint8,
+     "fill": css colour | None, "stroke": css colour | None, "lw": px, "cap", "join",
+     "dash": [offset, on, off, ...] | None, "hatch": {...} | None, "clip": index | None}
+    {"k": "markers", "v", "c" (the marker, relative px), "at": offsets (m, 2) float32, ...}
+    {"k": "image", "m": affine [a, b, c, d, e, f] from image pixels (top row first) to
+     display pixels, "rgba": (h, w, 4) uint8, "smooth": bool, "clip"}
+
+with clips (a rectangle and/or a path) kept once per frame in a table. Coordinates are
+matplotlib's display coordinates: pixels from the figure's bottom-left corner.
+:func:`pack` turns a scene into one ``bytes`` message (a JSON header, then every vertex as
+float32, every path code as uint8, every image's RGBA bytes); :func:`unpack` reads it back, as
+the browser does.
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+
+import numpy as np
+from matplotlib.backend_bases import RendererBase
+from matplotlib.path import Path
+from matplotlib.transforms import Affine2D
+
+__all__ = ["SceneRenderer", "pack", "unpack"]
+
+_CAPS = {"butt": "butt", "round": "round", "projecting": "square"}
+_MAGIC = b"4F9S"
+
+
+def _css(rgba, alpha=None) -> str | None:
+    """A CSS colour for an RGBA tuple (``alpha`` replacing its alpha), ``None`` if invisible."""
+    if rgba is None:
+        return None
+    r, g, b = (min(255, max(0, round(255 * float(v)))) for v in rgba[:3])
+    a = float(rgba[3]) if len(rgba) > 3 and alpha is None else (1.0 if alpha is None else alpha)
+    if a <= 0:
+        return None
+    return f"rgba({r},{g},{b},{a:.4g})"
+
+
+def _geometry(path) -> tuple[np.ndarray, np.ndarray]:
+    """A path's vertices (float32) and codes (uint8), codes filled in for a plain polyline."""
+    v = np.asarray(path.vertices, dtype=np.float32).reshape(-1, 2)
+    if path.codes is None:
+        c = np.full(len(v), Path.LINETO, dtype=np.uint8)
+        if len(c):
+            c[0] = Path.MOVETO
+    else:
+        c = np.asarray(path.codes, dtype=np.uint8)
+    keep = c != Path.STOP
+    return v[keep], c[keep]
+
+
+class SceneRenderer(RendererBase):
+    """Records the primitives matplotlib artists draw (see the module docstring).
+
+    Parameters
+    ----------
+    metrics : matplotlib.backends.backend_agg.RendererAgg
+        The Agg renderer of the same figure: its size, dpi and text metrics are used, so that
+        text is laid out exactly as a full Agg draw lays it out.
+
+    Notes
+    -----
+    ``items`` is the list the next primitives are appended to; the caller may swap it (one list
+    per artist) to keep an unchanged artist's items for the next frame. ``clips`` is the table
+    of clip regions the items point into; keep the renderer (and so the table) as long as such
+    kept items are reused.
+    """
+
+    def __init__(self, metrics):
+        super().__init__()
+        self._metrics = metrics
+        self.width, self.height, self.dpi = metrics.width, metrics.height, metrics.dpi
+        self.items: list[dict] = []
+        self.clips: list[dict] = []
+        self._clip_index: dict = {}
+        self._glyphs: dict = {}          # glyph -> (vertices, codes), read from the font once
+        self._outlines: dict = {}        # (text, font, features) -> Path, least recent first
+        self._smooth = True              # whether the browser smooths the next image it scales
+
+    # -- what artists ask a renderer ------------------------------------------------------------
+    def get_canvas_width_height(self):
+        return self.width, self.height
+
+    def points_to_pixels(self, points):
+        return points * self.dpi / 72.0
+
+    def get_text_width_height_descent(self, s, prop, ismath):
+        return self._metrics.get_text_width_height_descent(s, prop, ismath)
+
+    def option_image_nocomposite(self):
+        return True  # one item per image: the browser composites them
+
+    def draw_text(self, gc, x, y, s, prop, angle, ismath=False, mtext=None):
+        """Text as filled glyph outlines (matplotlib's ``TextToPath``), laid out by FreeType
+        as Agg lays it out. Outlines of plain text come from :meth:`_outline`'s caches."""
+        if ismath:
+            self._draw_text_as_path(gc, x, y, s, prop, angle, ismath, mtext)
+            return
+        path = self._outline(s, prop, mtext)
+        if path is None:
+            return
+        scale = self.points_to_pixels(prop.get_size_in_points()) / self._text2path.FONT_SCALE
+        # like _draw_text_as_path: with flipy(), Text.draw handed us y from the top
+        transform = Affine2D().scale(scale).rotate_deg(angle).translate(x, self.height - y)
+        gc.set_linewidth(0.0)
+        self.draw_path(gc, path, transform, rgbFace=gc.get_rgb())
+
+    def _outline(self, s, prop, mtext):
+        """The glyph outlines of ``s`` in ``prop`` (at ``TextToPath.FONT_SCALE``), or ``None``
+        for blank text. Matplotlib's ``get_text_path`` reads every glyph from the font again
+        on each call and joins them vertex by vertex; here glyphs are read once per renderer
+        and whole strings are kept (the last 1024), which makes a changed label cheap."""
+        extra = {}
+        if mtext is not None and hasattr(mtext, "get_fontfeatures"):
+            extra = {"features": mtext.get_fontfeatures(), "language": mtext.get_language()}
+        key = (s, hash(prop), repr(sorted(extra.items())))
+        path = self._outlines.pop(key, False)
+        if path is False:
+            text2path = self._text2path
+            font = text2path._get_font(prop)
+            glyphs, new, _ = text2path.get_glyphs_with_font(
+                font, s, glyph_map=self._glyphs, return_new_glyphs_only=True, **extra)
+            self._glyphs.update(new)
+            verts, codes = [], []
+            for glyph, x, y, scale in glyphs:
+                v, c = self._glyphs[glyph]
+                if len(v):
+                    verts.append(np.asarray(v) * scale + (x, y))
+                    codes.append(np.asarray(c))
+            path = Path(np.concatenate(verts), np.concatenate(codes)) if verts else None
+            if len(self._outlines) >= 1024:
+                self._outlines.pop(next(iter(self._outlines)))
+        self._outlines[key] = path
+        return path
+
+    # -- the primitives ---------------------------------------------------------------------------
+    def _clip(self, gc) -> int | None:
+        """The index of ``gc``'s clip region in :attr:`clips` (added when new), or ``None``.
+        Regions are keyed by content, so an index stays valid while the table lives."""
+        rect = gc.get_clip_rectangle()
+        tpath, affine = gc.get_clip_path()
+        if rect is None and tpath is None:
+            return None
+        clip = {"rect": None if rect is None else [round(float(b), 3) for b in rect.bounds]}
+        key = (tuple(clip["rect"] or ()),)
+        if tpath is not None:
+            clip["v"], clip["c"] = _geometry(tpath.cleaned(transform=affine, curves=True))
+            key += (clip["v"].tobytes(), clip["c"].tobytes())
+        if key not in self._clip_index:
+            self._clip_index[key] = len(self.clips)
+            self.clips.append(clip)
+        return self._clip_index[key]
+
+    def _style(self, gc, rgbFace, filled_only=False) -> dict:
+        forced = gc.get_forced_alpha()
+        alpha = gc.get_alpha() if forced else None
+        lw = 0.0 if filled_only else float(self.points_to_pixels(gc.get_linewidth()))
+        style = {"fill": _css(rgbFace, alpha) if rgbFace is not None else None,
+                 "stroke": _css(gc.get_rgb()) if lw > 0 else None,
+                 "lw": lw, "cap": _CAPS.get(gc.get_capstyle(), "butt"),
+                 "join": gc.get_joinstyle() or "miter", "dash": None, "hatch": None,
+                 "clip": self._clip(gc)}
+        offset, dashes = gc.get_dashes()
+        if dashes is not None and len(dashes) and style["stroke"] is not None:
+            style["dash"] = [float(self.points_to_pixels(offset or 0))] + \
+                [float(self.points_to_pixels(d)) for d in dashes]
+        if gc.get_hatch() is not None:
+            size = float(self.points_to_pixels(72))   # Agg: one hatch tile per inch
+            unit = gc.get_hatch_path()
+            hv, hc = _geometry(unit.cleaned(curves=True))
+            lw_hatch = (gc.get_hatch_linewidth() if hasattr(gc, "get_hatch_linewidth")
+                        else 1.0)
+            style["hatch"] = {"v": hv * size, "c": hc, "size": size,
+                              "color": _css(gc.get_hatch_color()),
+                              "lw": float(self.points_to_pixels(lw_hatch))}
+        return style
+
+    def draw_path(self, gc, path, transform, rgbFace=None):
+        lw = float(self.points_to_pixels(gc.get_linewidth()))
+        filled = rgbFace is not None or gc.get_hatch() is not None
+        margin = lw + 2
+        clip = None if filled else (-margin, -margin, self.width + margin, self.height + margin)
+        clean = path.cleaned(transform=transform, remove_nans=True, clip=clip,
+                             simplify=path.should_simplify and not filled, curves=True,
+                             stroke_width=lw, snap=gc.get_snap())
+        v, c = _geometry(clean)
+        if not len(v):
+            return
+        style = self._style(gc, rgbFace)
+        if style["fill"] is None and style["stroke"] is None and style["hatch"] is None:
+            return
+        self.items.append({"k": "path", "v": v, "c": c, **style})
+
+    def draw_markers(self, gc, marker_path, marker_trans, path, trans, rgbFace=None):
+        at = trans.transform(np.asarray(path.vertices, dtype=float).reshape(-1, 2))
+        if path.codes is not None:  # control points of curves carry no marker
+            codes = np.asarray(path.codes)
+            at = at[(codes == Path.MOVETO) | (codes == Path.LINETO)]
+        at = at[np.isfinite(at).all(axis=1)]
+        inside = ((at[:, 0] > -50) & (at[:, 0] < self.width + 50)
+                  & (at[:, 1] > -50) & (at[:, 1] < self.height + 50))
+        at = at[inside]
+        if not len(at):
+            return
+        lw = float(self.points_to_pixels(gc.get_linewidth()))
+        v, c = _geometry(marker_path.cleaned(transform=marker_trans, curves=True,
+                                             stroke_width=lw, snap=False))
+        style = self._style(gc, rgbFace)
+        if style["fill"] is None and style["stroke"] is None:
+            return
+        self.items.append({"k": "markers", "v": v, "c": c,
+                           "at": np.asarray(at, dtype=np.float32), **style})
+
+    def draw_image(self, gc, x, y, im, transform=None):
+        """An RGBA image with its bottom-left corner at ``(x, y)`` (resampled by matplotlib to
+        display pixels), or, with ``transform``, at its own resolution: ``transform`` maps the
+        unit square to display pixels relative to ``(x, y)``, as in matplotlib's vector
+        backends, and the browser scales it (see :meth:`draw_axes_image`)."""
+        rgba = np.asarray(im, dtype=np.uint8)
+        if rgba.ndim != 3 or rgba.shape[2] != 4 or 0 in rgba.shape:
+            return
+        alpha = gc.get_alpha()
+        if alpha is not None and alpha < 1:
+            rgba = rgba.copy()
+            rgba[..., 3] = (rgba[..., 3] * alpha).astype(np.uint8)
+        h, w = rgba.shape[:2]
+        if transform is None:
+            # the rows come bottom first: pixel (u, v) of the flipped image is at x + u, y + h - v
+            matrix = Affine2D().scale(1, -1).translate(x, y + h)
+            rgba = rgba[::-1]
+        else:  # image row v (top first in the browser) is unit-square height v / h
+            matrix = Affine2D().scale(1 / w, 1 / h) + transform + Affine2D().translate(x, y)
+        self.items.append({"k": "image", "m": [float(v) for v in matrix.get_affine().to_values()],
+                           "rgba": np.ascontiguousarray(rgba), "smooth": self._smooth,
+                           "clip": self._clip(gc)})
+
+    def draw_axes_image(self, image) -> None:
+        """Record an ``AxesImage`` at the resolution of its data, for the browser to scale.
+
+        ``AxesImage.draw`` resamples the data to display pixels in the kernel (milliseconds,
+        and the frame then carries every display pixel) unless its interpolation is
+        ``"none"``. This does what that draw does for ``"none"`` whatever the interpolation:
+        the browser scales the image, smoothly (bilinear) unless the interpolation is
+        ``"nearest"``/``"none"``, or matplotlib's default ``"auto"`` would pick nearest
+        (upsampling by 3 or more)."""
+        if not image.get_visible() or image.get_array() is None or image.get_array().size == 0:
+            image.stale = False
+            return
+        if not image.get_transform().is_affine:
+            image.draw(self)
+            return
+        gc = self.new_gc()
+        image._set_gc_clip(gc)
+        gc.set_alpha(image._get_scalar_alpha())
+        im, l, b, trans = image.make_image(self, unsampled=True)
+        if im is not None:
+            trans = Affine2D().scale(im.shape[1], im.shape[0]) + trans
+            interpolation = image.get_interpolation()
+            if interpolation in ("antialiased", "auto"):
+                corners = trans.transform([[0, 0], [1, 1]])
+                zoom = np.min(np.abs(corners[1] - corners[0]) / im.shape[1::-1])
+                interpolation = "nearest" if zoom >= 3 else "bilinear"
+            self._smooth = interpolation not in ("nearest", "none")
+            try:
+                self.draw_image(gc, l, b, im, trans)
+            finally:
+                self._smooth = True
+        gc.restore()
+        image.stale = False
+
+    def draw_gouraud_triangles(self, gc, triangles_array, colors_array, transform):
+        raise NotImplementedError("the explorers draw no Gouraud-shaded triangles")
+
+
+# -- one scene as one message ---------------------------------------------------------------------
+
+def pack(items: list[dict], clips: list[dict], height: float) -> bytes:
+    """One message: ``b"4F9S"``, the header's length (uint32, little-endian), the JSON header,
+    padding to 4 bytes, every vertex (float32 x, y), every code (uint8, padded to 4 bytes), and
+    every image's RGBA bytes. Arrays in the header become ``[start, count]`` into those blocks."""
+    verts, codes, images = [], [], []
+    n_verts = n_image_bytes = 0
+
+    def geometry(v, c):
+        nonlocal n_verts
+        start = n_verts
+        verts.append(v)
+        codes.append(c)
+        n_verts += len(v)
+        return [start, len(v)]
+
+    header_items = []
+    for item in items:
+        out = {k: val for k, val in item.items() if k not in ("v", "c", "at", "rgba", "hatch")}
+        if "v" in item:
+            out["v"] = geometry(item["v"], item["c"])
+        if "at" in item:
+            out["at"] = geometry(item["at"], np.zeros(len(item["at"]), dtype=np.uint8))
+        if item.get("hatch") is not None:
+            h = item["hatch"]
+            out["hatch"] = {k: val for k, val in h.items() if k not in ("v", "c")}
+            out["hatch"]["v"] = geometry(h["v"], h["c"])
+        if "rgba" in item:
+            h, w = item["rgba"].shape[:2]
+            out.update(w=w, h=h, o=n_image_bytes)
+            images.append(item["rgba"])
+            n_image_bytes += item["rgba"].nbytes
+        header_items.append(out)
+    header_clips = []
+    for clip in clips:
+        out = {"rect": clip["rect"]}
+        if "v" in clip:
+            out["v"] = geometry(clip["v"], clip["c"])
+        header_clips.append(out)
+    header = json.dumps({"height": float(height), "items": header_items, "clips": header_clips,
+                         "nv": n_verts}, separators=(",", ":")).encode()
+    header += b" " * (-(len(_MAGIC) + 4 + len(header)) % 4)
+    v = np.concatenate(verts).astype("<f4", copy=False) if verts else np.zeros((0, 2), "<f4")
+    c = np.concatenate(codes) if codes else np.zeros(0, np.uint8)
+    c_bytes = c.tobytes() + b"\0" * (-len(c) % 4)
+    return b"".join([_MAGIC, struct.pack("<I", len(header)), header, v.tobytes(), c_bytes,
+                     *(im.tobytes() for im in images)])
+
+
+def unpack(message: bytes) -> dict:
+    """Read a :func:`pack` message back: the header with every ``[start, count]`` replaced by
+    the arrays it points to (the reading the browser does, for the tests)."""
+    if message[:4] != _MAGIC:
+        raise ValueError("message: not a scene (it does not start with b'4F9S')")
+    (n,) = struct.unpack_from("<I", message, 4)
+    header = json.loads(message[8:8 + n])
+    offset = 8 + n
+    nv = header["nv"]
+    verts = np.frombuffer(message, "<f4", 2 * nv, offset).reshape(nv, 2)
+    offset += 8 * nv
+    codes = np.frombuffer(message, np.uint8, nv, offset)
+    offset += nv + (-nv % 4)
+
+    def arrays(ref):
+        start, count = ref
+        return verts[start:start + count], codes[start:start + count]
+
+    for item in header["items"]:
+        if "v" in item:
+            item["v"], item["c"] = arrays(item["v"])
+        if "at" in item:
+            item["at"] = arrays(item["at"])[0]
+        if item.get("hatch"):
+            item["hatch"]["v"], item["hatch"]["c"] = arrays(item["hatch"]["v"])
+        if "o" in item:
+            size = item["w"] * item["h"] * 4
+            item["rgba"] = np.frombuffer(message, np.uint8, size, offset + item["o"]).reshape(
+                item["h"], item["w"], 4)
+    for clip in header["clips"]:
+        if "v" in clip:
+            clip["v"], clip["c"] = arrays(clip["v"])
+    return header
