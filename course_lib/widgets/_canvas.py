@@ -61,7 +61,7 @@ function tracePath(V, C, ref, y0, sy) {
   return p;
 }
 
-function hatchPattern(ctx, scene, hatch, cache) {
+function hatchPattern(ctx, scene, hatch, ref, cache) {
   const key = JSON.stringify(hatch);
   if (!cache.has(key)) {
     const size = Math.max(1, Math.round(hatch.size));
@@ -70,7 +70,7 @@ function hatchPattern(ctx, scene, hatch, cache) {
     const t = tile.getContext("2d");
     t.strokeStyle = hatch.color || "black";
     t.lineWidth = hatch.lw;
-    t.stroke(tracePath(scene.V, scene.C, hatch.v, size, -1));
+    t.stroke(tracePath(scene.V, scene.C, ref, size, -1));
     cache.set(key, ctx.createPattern(tile, "repeat"));
   }
   return cache.get(key);
@@ -90,7 +90,10 @@ function applyClip(ctx, scene, index, H) {
 
 function paintShape(ctx, scene, item, shape, hatches) {
   if (item.fill) { ctx.fillStyle = item.fill; ctx.fill(shape); }
-  if (item.hatch) { ctx.fillStyle = hatchPattern(ctx, scene, item.hatch, hatches); ctx.fill(shape); }
+  if (item.hatch) {
+    ctx.fillStyle = hatchPattern(ctx, scene, item.hatch, item.hv, hatches);
+    ctx.fill(shape);
+  }
   if (item.stroke && item.lw > 0) {
     ctx.strokeStyle = item.stroke;
     ctx.lineWidth = item.lw;
@@ -109,6 +112,16 @@ function paintScene(ctx, scene, scratch, hatches) {
     applyClip(ctx, scene, item.clip, H);
     if (item.k === "path") {
       paintShape(ctx, scene, item, tracePath(scene.V, scene.C, item.v, H, -1), hatches);
+    } else if (item.k === "paths") {          // a collection: one colour per path
+      let start = item.v[0];
+      const one = {lw: item.lw, cap: item.cap, join: item.join};
+      for (let i = 0; i < item.n.length; i++) {
+        const shape = tracePath(scene.V, scene.C, [start, item.n[i]], H, -1);
+        start += item.n[i];
+        one.fill = item.fills.length ? item.fills[i % item.fills.length] : null;
+        one.stroke = item.strokes.length ? item.strokes[i % item.strokes.length] : null;
+        paintShape(ctx, scene, one, shape, hatches);
+      }
     } else if (item.k === "markers") {
       const marker = tracePath(scene.V, scene.C, item.v, 0, -1);
       const [start, count] = item.at;
@@ -117,8 +130,16 @@ function paintScene(ctx, scene, scratch, hatches) {
         paintShape(ctx, scene, item, marker, hatches);
       }
     } else if (item.k === "image") {
-      const size = item.w * item.h * 4;
-      const data = new Uint8ClampedArray(scene.images.slice(item.o, item.o + size).buffer);
+      const n = item.w * item.h;
+      let data;
+      if (item.gray) {                        // one grey byte per pixel: expand to RGBA
+        const grey = scene.images.subarray(item.o, item.o + n);
+        const rgba = new Uint32Array(n);
+        for (let i = 0; i < n; i++) rgba[i] = 0xff000000 | (grey[i] * 0x010101);
+        data = new Uint8ClampedArray(rgba.buffer);
+      } else {
+        data = new Uint8ClampedArray(scene.images.slice(item.o, item.o + 4 * n).buffer);
+      }
       scratch.width = item.w; scratch.height = item.h;
       scratch.getContext("2d").putImageData(new ImageData(data, item.w, item.h), 0, 0);
       const [a, b, c, d, e, f] = item.m;      // image pixels -> display -> canvas (y down)

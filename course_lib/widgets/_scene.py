@@ -16,8 +16,11 @@ A scene is a list of items, one per primitive::
      "fill": css colour | None, "stroke": css colour | None, "lw": px, "cap", "join",
      "dash": [offset, on, off, ...] | None, "hatch": {...} | None, "clip": index | None}
     {"k": "markers", "v", "c" (the marker, relative px), "at": offsets (m, 2) float32, ...}
+    {"k": "paths", "v", "c" (every path, one after the other), "n": vertices per path,
+     "fills", "strokes": css colours, cycled over the paths, "lw", "cap", "join", "clip"}
     {"k": "image", "m": affine [a, b, c, d, e, f] from image pixels (top row first) to
-     display pixels, "rgba": (h, w, 4) uint8, "smooth": bool, "clip"}
+     display pixels, "rgba": (h, w, 4) uint8, or (h, w) for an opaque grey image,
+     "smooth": bool, "clip"}
 
 with clips (a rectangle and/or a path) kept once per frame in a table. Coordinates are
 matplotlib's display coordinates: pixels from the figure's bottom-left corner.
@@ -247,6 +250,9 @@ class SceneRenderer(RendererBase):
             rgba = rgba[::-1]
         else:  # image row v (top first in the browser) is unit-square height v / h
             matrix = Affine2D().scale(1 / w, 1 / h) + transform + Affine2D().translate(x, y)
+        if (rgba[..., 3] == 255).all() and (rgba[..., 0] == rgba[..., 1]).all() \
+                and (rgba[..., 1] == rgba[..., 2]).all():
+            rgba = rgba[..., 0]  # opaque grey (a B-scan): a quarter of the bytes to send
         self.items.append({"k": "image", "m": [float(v) for v in matrix.get_affine().to_values()],
                            "rgba": np.ascontiguousarray(rgba), "smooth": self._smooth,
                            "clip": self._clip(gc)})
@@ -285,52 +291,115 @@ class SceneRenderer(RendererBase):
         gc.restore()
         image.stale = False
 
+    def draw_path_collection(self, gc, master_transform, paths, all_transforms, offsets,
+                             offset_trans, facecolors, edgecolors, linewidths, linestyles,
+                             antialiaseds, urls, offset_position, **kwargs):
+        """A collection as one ``"paths"`` item (all outlines transformed at once, a colour per
+        path) when its paths share one transform, offset, width and solid line style (the
+        collimator's hundreds of holes); otherwise one ``draw_path`` per path, as matplotlib's
+        base renderer does."""
+        offsets = np.asarray(offsets, dtype=float).reshape(-1, 2)
+        simple = (len(paths) > 0 and len(all_transforms) == 0 and len(offsets) <= 1
+                  and len(linewidths) <= 1 and all(d is None for _, d in linestyles)
+                  and gc.get_hatch() is None)
+        if not simple:
+            super().draw_path_collection(gc, master_transform, paths, all_transforms, offsets,
+                                         offset_trans, facecolors, edgecolors, linewidths,
+                                         linestyles, antialiaseds, urls, offset_position,
+                                         **kwargs)
+            return
+        transform = master_transform
+        if len(offsets):
+            xo, yo = offset_trans.transform(offsets[0])
+            transform = master_transform + Affine2D().translate(xo, yo)
+        geometry = [_geometry(p) for p in paths]
+        v = np.concatenate([g[0] for g in geometry]).astype(np.float64)
+        v = np.asarray(transform.transform(v), dtype=np.float32)
+        keep = np.isfinite(v).all(axis=1)
+        if not keep.all():
+            return super().draw_path_collection(gc, master_transform, paths, all_transforms,
+                                                offsets, offset_trans, facecolors, edgecolors,
+                                                linewidths, linestyles, antialiaseds, urls,
+                                                offset_position, **kwargs)
+        lw = float(self.points_to_pixels(linewidths[0] if len(linewidths) else
+                                         gc.get_linewidth()))
+        forced = gc.get_alpha() if gc.get_forced_alpha() else None
+        fills = [_css(c, forced) for c in facecolors]
+        strokes = [_css(c, forced) for c in edgecolors] if lw > 0 else []
+        if not any(fills) and not any(strokes):
+            return
+        self.items.append({"k": "paths", "v": v, "c": np.concatenate([g[1] for g in geometry]),
+                           "n": [len(g[0]) for g in geometry], "fills": fills,
+                           "strokes": strokes, "lw": lw,
+                           "cap": _CAPS.get(gc.get_capstyle(), "butt"),
+                           "join": gc.get_joinstyle() or "miter", "clip": self._clip(gc)})
+
     def draw_gouraud_triangles(self, gc, triangles_array, colors_array, transform):
         raise NotImplementedError("the explorers draw no Gouraud-shaded triangles")
 
 
 # -- one scene as one message ---------------------------------------------------------------------
 
+_ARRAYS = ("v", "c", "at", "rgba", "hatch")
+
+
+def _static_json(item: dict) -> str:
+    """An item's header fields that are not arrays, as JSON without its closing brace; kept in
+    the item (``"_json"``), since an unchanged artist's items are packed again every frame."""
+    text = item.get("_json")
+    if text is None:
+        fields = {k: v for k, v in item.items()
+                  if k not in _ARRAYS and not k.startswith("_") and v is not None}
+        if item.get("hatch") is not None:
+            fields["hatch"] = {k: v for k, v in item["hatch"].items() if k not in ("v", "c")}
+        if "rgba" in item:
+            fields["h"], fields["w"] = item["rgba"].shape[:2]
+            fields["gray"] = item["rgba"].ndim == 2
+        text = item["_json"] = json.dumps(fields, separators=(",", ":"))[:-1]
+    return text
+
+
 def pack(items: list[dict], clips: list[dict], height: float) -> bytes:
     """One message: ``b"4F9S"``, the header's length (uint32, little-endian), the JSON header,
     padding to 4 bytes, every vertex (float32 x, y), every code (uint8, padded to 4 bytes), and
-    every image's RGBA bytes. Arrays in the header become ``[start, count]`` into those blocks."""
+    every image's bytes (RGBA, or one grey byte per pixel when ``"gray"``). Arrays in the header
+    become ``[start, count]`` into those blocks (a hatch's as ``"hv"``), an image's bytes an
+    offset ``"o"``."""
     verts, codes, images = [], [], []
     n_verts = n_image_bytes = 0
 
     def geometry(v, c):
         nonlocal n_verts
-        start = n_verts
         verts.append(v)
         codes.append(c)
         n_verts += len(v)
-        return [start, len(v)]
+        return f"[{n_verts - len(v)},{len(v)}]"
 
-    header_items = []
+    parts = []
     for item in items:
-        out = {k: val for k, val in item.items() if k not in ("v", "c", "at", "rgba", "hatch")}
+        text = [_static_json(item)]
         if "v" in item:
-            out["v"] = geometry(item["v"], item["c"])
+            text.append(f',"v":{geometry(item["v"], item["c"])}')
         if "at" in item:
-            out["at"] = geometry(item["at"], np.zeros(len(item["at"]), dtype=np.uint8))
+            at = item["at"]
+            text.append(f',"at":{geometry(at, np.zeros(len(at), dtype=np.uint8))}')
         if item.get("hatch") is not None:
-            h = item["hatch"]
-            out["hatch"] = {k: val for k, val in h.items() if k not in ("v", "c")}
-            out["hatch"]["v"] = geometry(h["v"], h["c"])
+            text.append(f',"hv":{geometry(item["hatch"]["v"], item["hatch"]["c"])}')
         if "rgba" in item:
-            h, w = item["rgba"].shape[:2]
-            out.update(w=w, h=h, o=n_image_bytes)
+            text.append(f',"o":{n_image_bytes}')
             images.append(item["rgba"])
             n_image_bytes += item["rgba"].nbytes
-        header_items.append(out)
+        parts.append("".join(text) + "}")
     header_clips = []
     for clip in clips:
         out = {"rect": clip["rect"]}
         if "v" in clip:
-            out["v"] = geometry(clip["v"], clip["c"])
+            start = n_verts
+            geometry(clip["v"], clip["c"])
+            out["v"] = [start, len(clip["v"])]
         header_clips.append(out)
-    header = json.dumps({"height": float(height), "items": header_items, "clips": header_clips,
-                         "nv": n_verts}, separators=(",", ":")).encode()
+    header = (f'{{"height":{float(height)!r},"nv":{n_verts},"items":[{",".join(parts)}],'
+              f'"clips":{json.dumps(header_clips, separators=(",", ":"))}}}').encode()
     header += b" " * (-(len(_MAGIC) + 4 + len(header)) % 4)
     v = np.concatenate(verts).astype("<f4", copy=False) if verts else np.zeros((0, 2), "<f4")
     c = np.concatenate(codes) if codes else np.zeros(0, np.uint8)
@@ -362,12 +431,12 @@ def unpack(message: bytes) -> dict:
             item["v"], item["c"] = arrays(item["v"])
         if "at" in item:
             item["at"] = arrays(item["at"])[0]
-        if item.get("hatch"):
-            item["hatch"]["v"], item["hatch"]["c"] = arrays(item["hatch"]["v"])
+        if "hv" in item:
+            item["hatch"]["v"], item["hatch"]["c"] = arrays(item.pop("hv"))
         if "o" in item:
-            size = item["w"] * item["h"] * 4
-            item["rgba"] = np.frombuffer(message, np.uint8, size, offset + item["o"]).reshape(
-                item["h"], item["w"], 4)
+            shape = (item["h"], item["w"]) if item["gray"] else (item["h"], item["w"], 4)
+            item["rgba"] = np.frombuffer(message, np.uint8, int(np.prod(shape)),
+                                         offset + item["o"]).reshape(shape)
     for clip in header["clips"]:
         if "v" in clip:
             clip["v"], clip["c"] = arrays(clip["v"])

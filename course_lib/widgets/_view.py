@@ -38,6 +38,7 @@ from __future__ import annotations
 import asyncio
 import io
 import math
+import sys
 import time
 
 import ipywidgets as W
@@ -272,7 +273,9 @@ class ScenePainter(Blitter):
             if not a.get_visible():
                 continue
             kept = self._kept.get(id(a))
-            if kept is not None and kept[0] is a and not a.stale and _cacheable(a):
+            data = _data_of(a)
+            if (kept is not None and kept[0] is a and kept[2] is data and not a.stale
+                    and _cacheable(a)):
                 items.extend(kept[1])
                 continue
             scene.items = []
@@ -280,7 +283,7 @@ class ScenePainter(Blitter):
                 scene.draw_axes_image(a)  # at its own resolution: the browser scales it
             else:
                 a.draw(scene)
-            self._kept[id(a)] = (a, scene.items)
+            self._kept[id(a)] = (a, scene.items, data)
             items.extend(scene.items)
         width, height = (int(round(v)) for v in self.fig.bbox.size)
         self.widget.show(scene=pack(items, scene.clips, scene.height), size=(width, height),
@@ -324,16 +327,20 @@ class ScenePainter(Blitter):
 
 
 def _plain_agg_canvas(fig) -> None:
-    """Give ``fig`` a plain Agg canvas when it has another one (ipympl's, under
-    ``%matplotlib widget``): that canvas is a widget of its own, whose page asks the kernel
-    for full redraws, and which would start drawing the figure if it were ever displayed.
-    It is closed (its page model goes away); callbacks live on the figure and stay."""
+    """Make ``fig`` the browser canvas' own: out of pyplot, on a plain Agg canvas.
+
+    pyplot would otherwise keep the figure as its current one (a student's next ``plt.plot``
+    would draw into the explorer, and the inline backend would show it again as a picture).
+    Another canvas (ipympl's, under ``%matplotlib widget``) is a widget of its own, whose page
+    asks the kernel for full redraws: it is closed. Callbacks live on the figure and stay."""
+    pyplot = sys.modules.get("matplotlib.pyplot")
+    if pyplot is not None:
+        pyplot.close(fig)
     old = fig.canvas
-    if type(old) is FigureCanvasAgg:
-        return
-    FigureCanvasAgg(fig)
-    if isinstance(old, W.Widget):
-        old.close()
+    if type(old) is not FigureCanvasAgg:
+        FigureCanvasAgg(fig)
+        if isinstance(old, W.Widget):
+            old.close()
 
 
 def _running_loop():
@@ -367,6 +374,16 @@ def _project_3d(ax, children) -> None:
         kind = Collection if isinstance(a, Collection) else Patch
         a.zorder = zorder[kind]
         zorder[kind] += 1
+
+
+def _data_of(artist):
+    """The data array of a colour-mapped artist (a collection's ``set_array``), else ``None``.
+
+    ``set_array`` does not mark an artist stale, so a kept picture of it (a sprite, recorded
+    scene items) is valid only while the artist still holds the very same array object: the
+    kept entry holds that array, so a new one can never reuse its ``id``."""
+    get_array = getattr(artist, "get_array", None)
+    return get_array() if callable(get_array) and not isinstance(artist, AxesImage) else None
 
 
 def _cacheable(artist) -> bool:
@@ -418,8 +435,9 @@ class SpriteCache:
         """Composite ``artist``'s sprite (made now if missing) onto ``renderer``."""
         key = id(artist)
         entry = self._sprites.get(key)
-        if entry is None or entry[0] is not artist:
-            entry = self._sprites[key] = (artist, self._render(artist))
+        data = _data_of(artist)
+        if entry is None or entry[0] is not artist or entry[2] is not data:
+            entry = self._sprites[key] = (artist, self._render(artist), data)
         sprite = entry[1]
         if sprite is not None:
             x, y, image = sprite

@@ -228,9 +228,9 @@ class ClippingExplorer:
             title = (f"after plane {k} of 6, {clipping.PLANE_NAMES[k - 1]}: "
                      f"{len(current)} vertices" + ("" if len(current) >= 3 else " (nothing left)"))
         self.status.set_text(title)
-        self.readout.value = self._table(current)
         self.last_update_ms = 1000 * (time.perf_counter() - t0)
         self._view.redraw(self.fig)
+        self.readout.value = self._table(current)  # the figure's frame first, the table after it
 
     def _plane_line_2d(self, k):
         """The active plane seen edge-on in the 2-D panel (when it is perpendicular to it)."""

@@ -237,8 +237,9 @@ class CollimatorExplorer(FigureExplorer):
 
     def update(self):
         """Recompute, change the artists in place, refresh the readout and redraw."""
-        self.refresh()
-        self._redraw()
+        with self.readout.hold_sync():  # the figure's frame goes first, the readout after it
+            self.refresh()
+            self._redraw()
 
     def refresh(self):
         """The per-update compute: the holes' verdicts and transmissions, the artists' data and

@@ -130,8 +130,8 @@ class CaseExplorer(FigureExplorer):
         self.triangles = update_case(self.art, index, alternative=alt, iso=self.iso.value)
         self.title.set_text(f"case index {index} (Lorensen case {mc.case_of(index)}), "
                             f"iso {self.iso.value:.2f}")
+        self._redraw()  # the figure's frame first, the text after it
         self.info.value = case_summary(index, alt)
-        self._redraw()
 
     def _set_index(self, index: int):
         """Bring all three case controls to ``index`` without re-entering the callbacks."""

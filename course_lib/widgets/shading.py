@@ -187,8 +187,9 @@ class PhongExplorer(FigureExplorer):
 
     def update(self):
         """Re-render both spheres in place, refresh the markers and the readout, redraw."""
-        self.refresh()
-        self._redraw()
+        with self.readout.hold_sync():  # the figure's frame goes first, the readout after it
+            self.refresh()
+            self._redraw()
 
     def refresh(self):
         """The per-update compute: two renders into the images (``set_data``), the markers and
