@@ -161,7 +161,7 @@ def launch(
     token = secrets.token_hex(24) if token is None else token
     write_launch_config(config_dir, role, course.root)
     python, env = launch_environment(role, course.root, student_env, build_cache)
-    # the kernels must pick their backend as in any JupyterLab (inline, or the notebook's own
+    # the kernels must pick their backend as in any JupyterLab (inline, or a student's own
     # ``%matplotlib widget``): the Agg that ``make`` and the test runs export would hide figures
     env.pop("MPLBACKEND", None)
     env["JUPYTER_CONFIG_PATH"] = os.pathsep.join(

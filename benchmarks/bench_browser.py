@@ -1,18 +1,19 @@
 """Browser: key press on a slider to changed pixels, for every explorer, in Chromium via JupyterLab.
 
 What a student feels when dragging a control (issue 15). For each explorer a scratch notebook
-(``%matplotlib widget``, then the explorer) runs in a real JupyterLab on localhost; Debian's
-Chromium, driven by Playwright, focuses one slider's handle and presses an arrow key
-``PRESSES`` times. Inside the page a capture-phase ``keydown`` listener notes the event's
-time and a ``requestAnimationFrame`` loop compares the ipympl canvas' pixels with the frame
-shown before the press: the latency is the time to the first frame that differs. After that
-the loop watches until the canvas has been still for ``SETTLE_MS``, counting the frames that
-changed (one per press: no intermediate or flickering frame), before the next press.
+(the explorer as its last expression, as in the course's notebooks) runs in a real JupyterLab on
+localhost; Debian's Chromium, driven by Playwright, focuses one slider's handle and presses an
+arrow key ``PRESSES`` times. Inside the page a capture-phase ``keydown`` listener notes the
+event's time and a ``requestAnimationFrame`` loop compares the figure canvas' pixels with the
+frame shown before the press: the latency is the time to the first frame that differs. After
+that the loop watches until the canvas has been still for ``SETTLE_MS``, counting the frames
+that changed (one per press: no intermediate or flickering frame), before the next press.
 
-Each explorer is measured twice in the same run: as it is now ("ours") and as it was before
-issue 15 ("peer"): the ``course_lib`` package of commit ``BEFORE_REF`` (override with the
-environment variable ``BENCH_BROWSER_BEFORE``; ``none`` skips it), exported from git into the
-scratch folder under another name. The target is a p90 below ``TARGET_MS``.
+Each explorer is measured twice in the same run: as it is now ("ours", painted by the browser)
+and as it was before issue 15 ("peer"): the ``course_lib`` package of commit ``BEFORE_REF``
+(override with the environment variable ``BENCH_BROWSER_BEFORE``; ``none`` skips it), exported
+from git into the scratch folder under another name, whose figures are ipympl canvases (its
+notebook starts with ``%matplotlib widget``). The target is a p90 below ``TARGET_MS``.
 
 At smoke sizes one explorer gets three presses and no "before" run. Without Chromium, or
 outside a git checkout for the "before" code, the rows say what was not measured.
@@ -164,8 +165,9 @@ def export_before(ref: str, dest: Path) -> str | None:
 
 def write_notebook(path: Path, package: str, module: str, factory: str,
                    extra_path: Path | None) -> None:
-    """A two-cell notebook: ``%matplotlib widget``, then the explorer as the last expression."""
-    setup = "%matplotlib widget\n"
+    """A two-cell notebook: set-up (``%matplotlib widget`` for the "before" code, whose
+    explorers were ipympl canvases), then the explorer as the last expression."""
+    setup = "" if package == "course_lib" else "%matplotlib widget\n"
     if extra_path is not None:
         setup += f"import sys\nsys.path.insert(0, {str(extra_path)!r})\n"
     cells = [setup, f"from {package}.widgets.{module} import {factory}\n{factory}()"]

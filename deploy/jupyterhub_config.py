@@ -27,7 +27,7 @@ def _members(group):
 def _env(env_dir, config_dir):
     """A server's environment: its venv first on PATH, its Jupyter config, nothing else's."""
     return {"PATH": f"{env_dir}/bin:/usr/local/bin:/usr/bin:/bin", "VIRTUAL_ENV": env_dir,
-            "JUPYTER_CONFIG_PATH": config_dir}  # no MPLBACKEND: the notebooks pick ipympl
+            "JUPYTER_CONFIG_PATH": config_dir}  # no MPLBACKEND: figures show inline
 
 
 # --- the hub, the proxy, their state ---------------------------------------------------------

@@ -515,13 +515,11 @@ class FigureExplorer:
         display(self.widget)
 
 
-def use_blitting(explorer) -> FigureView:
-    """Make ``explorer`` redraw its own Agg canvas by blitting (the tests and
-    ``benchmarks/bench_widgets.py`` measure that redraw headless this way).
+def set_view(explorer, view):
+    """Give ``explorer`` another figure view (anything with ``redraw(fig)``); returns it.
 
-    Returns the new :class:`FigureView`; its ``blitter`` counts full draws and blits.
-    """
-    view = FigureView(blit=True)
+    The tests and benchmarks swap views this way: :func:`use_blitting`, or a view that draws
+    nothing, to time an update's compute alone."""
     if isinstance(explorer, FigureExplorer):
         explorer._figure_view = view
     elif hasattr(explorer, "_view"):  # the B-scan and clipping explorers hold their own view
@@ -529,3 +527,12 @@ def use_blitting(explorer) -> FigureView:
     else:
         raise ValueError(f"explorer: {type(explorer).__name__} has no figure view to replace")
     return view
+
+
+def use_blitting(explorer) -> FigureView:
+    """Make ``explorer`` redraw its own Agg canvas by blitting (the tests and
+    ``benchmarks/bench_widgets.py`` measure that redraw headless this way).
+
+    Returns the new :class:`FigureView`; its ``blitter`` counts full draws and blits.
+    """
+    return set_view(explorer, FigureView(blit=True))

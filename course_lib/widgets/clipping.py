@@ -5,11 +5,11 @@ right, bottom, top, near, far); a drop-down picks a vertex and four sliders move
 homogeneous coordinates ``[X, Y, Z, w]`` (so you can watch a vertex go behind the eye, ``w < 0``,
 and see the naive divide throw it in front). The left panel is 3-D screen space with the view
 volume and the plane being applied; the right panel looks along one screen axis. All artists are
-updated in place; under ipympl the figure is blitted (:mod:`course_lib.widgets._view`, issue
-15): the 2-D panel's axes stay cached and the 3-D panel's contents are projected and drawn
-again over its cached panes and ticks.
+updated in place and painted by the browser (:mod:`course_lib.widgets._view`, issue 15): the
+2-D panel's axes stay cached and the 3-D panel's contents are projected and sent again, to be
+drawn over its cached panes and ticks.
 
-In JupyterLab run ``%matplotlib widget`` first, then::
+In a notebook (any matplotlib backend)::
 
     from course_lib.widgets.clipping import clipping_explorer
     clipping_explorer()

@@ -26,15 +26,14 @@ open, 0.25 %.
 Every change calls :meth:`CollimatorExplorer.update`, which replaces the paths and colour values
 of the existing hole collections (``set_paths``, ``set_array``), moves the circles, rectangles
 and lines (``set_radius``, ``set_bounds``, ``set_data``) and redraws; no artist is created.
-With ipympl the redraw blits (:mod:`course_lib.widgets._view`): only what changed is drawn
-again. So that a move of ``d``, ``L`` or ``z`` never changes an axes' limits (which would mean
+The browser paints what changed over the cached axes (:mod:`course_lib.widgets._view`,
+issue 15). So that a move of ``d``, ``L`` or ``z`` never changes an axes' limits (which would mean
 redrawing the whole figure, ticks and all), the side view keeps its data in mm and fits them
 into fixed axes with one scaling (``side_limits`` holds the mm shown); it has no ticks, its
 labels give the sizes.
 
-In a notebook::
+In a notebook (any matplotlib backend)::
 
-    %matplotlib widget
     from course_lib.widgets.gamma_camera import collimator_explorer
     collimator_explorer()
 """
@@ -213,7 +212,7 @@ class CollimatorExplorer(FigureExplorer):
         ax.set_ylabel("distance from the collimator face")
         ax.set_title("Q2(c): one hole, side view (not to scale)", fontsize=9)
         # The side view keeps its data in mm and fits them to fixed axes through one scaling
-        # (set by _update_side): its limits never change, so a slider move blits.
+        # (set by _update_side): its limits never change, so a slider move keeps the background.
         self._side_fit = Affine2D()
         fitted = self._side_fit + ax.transData
         for artist in (*septa, *rays, *extreme, bracket, crystal, face_line, source,

@@ -10,12 +10,11 @@ inside corner: the linear interpolation of Q3(a) (the table says *which* edge, t
 Choose a case three ways: Lorensen's number (one of the 15 classes, Q3(b)), the case index
 0 ... 255, or the eight corner toggles; the three stay in step. Every change calls
 :meth:`CaseExplorer.update`, which moves the existing artists (``set_verts`` on the triangles,
-marker colours on the corners) and redraws; under ipympl the redraw blits
-(:mod:`course_lib.widgets._view`, issue 15): the 3-D panes and ticks stay cached.
+marker colours on the corners) and redraws: the browser paints the projected triangles and
+corners over the cached 3-D panes and ticks (:mod:`course_lib.widgets._view`, issue 15).
 
-In a notebook::
+In a notebook (any matplotlib backend)::
 
-    %matplotlib widget
     from course_lib.widgets.marching_cubes import case_explorer
     case_explorer()
 """

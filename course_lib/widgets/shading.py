@@ -11,14 +11,13 @@ under both models. The button "Exam Q5(b)" loads the worked example, whose Phong
 since a slider can show the light's elevation of 35.26 degrees only to its step).
 
 Every change calls :meth:`PhongExplorer.update`, which re-renders into the existing images with
-``set_data`` (two 128 x 128 renders, a few milliseconds) and moves the markers. Under ipympl
-the figure is then blitted (:mod:`course_lib.widgets._view`, issue 15): the axes frames and
-titles stay cached and only the two images, the markers and the legend are drawn again, so a
-slider key answers within a frame or two instead of waiting for a full matplotlib redraw.
+``set_data`` (two 128 x 128 renders, a few milliseconds) and moves the markers. The browser
+paints the figure (:mod:`course_lib.widgets._view`, issue 15): the axes frames and titles stay
+cached, and only the two images (at 128 x 128, scaled by the page), the markers and the legend
+are sent again.
 
-In a notebook::
+In a notebook (any matplotlib backend)::
 
-    %matplotlib widget
     from course_lib.widgets.shading import phong_explorer
     phong_explorer()
 

@@ -7,16 +7,14 @@ placed freely. It draws the control polygon, the segments in their own colours, 
 the control points, and it writes the formulas of ``p``, ``p'`` and ``p''`` for the chosen case
 (Q4(b) general form, then with the rule substituted, then the numbers).
 
-Control points move by dragging them on the figure (with ``%matplotlib widget``, i.e. ipympl)
-or, always, with the point selector and its two sliders. Every change calls :meth:`update`,
-which moves the existing artists (``set_data``, ``set_xy``, ``set_positions``) and redraws.
-Under ipympl the redraw blits (:mod:`course_lib.widgets._view`, issue 15): the axes, grid and
-ticks stay cached and the unchanged legend is pasted back, so a dragged point follows the
-mouse instead of waiting for a full matplotlib redraw.
+Control points move by dragging them on the figure or with the point selector and its two
+sliders. Every change calls :meth:`update`, which moves the existing artists (``set_data``,
+``set_xy``, ``set_positions``) and redraws: the browser paints the changed artists over the
+cached axes, grid and ticks (:mod:`course_lib.widgets._view`, issue 15), so a dragged point
+follows the mouse.
 
-In a notebook::
+In a notebook (any matplotlib backend)::
 
-    %matplotlib widget
     from course_lib.widgets.splines import spline_end_explorer
     spline_end_explorer()
 """
@@ -255,7 +253,7 @@ class SplineEndExplorer(FigureExplorer):
         self._syncing = False
 
     # ---------------------------------------------------------------------------------------
-    # dragging (ipympl mouse events; also works with synthetic MouseEvents)
+    # dragging (the canvas' mouse events, as matplotlib MouseEvents; synthetic ones work too)
 
     def _draggable(self):
         items = [(i, p) for i, p in enumerate(self.points)]

@@ -2,10 +2,10 @@
 
 Built from explicit ipywidgets controls with ``.observe`` callbacks (no ``interact``): the
 figure is drawn once and :meth:`BScanExplorer.update` changes its artists in place
-(``AxesImage.set_data``, ``Line2D.set_data``, ``Text.set_text``). Works with the ipympl backend
-(``%matplotlib widget``) in JupyterLab and headless with Agg. Under ipympl the figure is
-blitted (:mod:`course_lib.widgets._view`, issue 15): axes, ticks and labels stay cached, and
-only the image, the outlines, the A-lines and the title are drawn again.
+(``AxesImage.set_data``, ``Line2D.set_data``, ``Text.set_text``), under any matplotlib backend.
+The browser paints the figure (:mod:`course_lib.widgets._view`, issue 15): axes, ticks and
+labels stay cached, and only the image (at its own resolution, scaled by the page), the
+outlines, the A-lines and the title are sent again.
 """
 
 from __future__ import annotations
