@@ -234,3 +234,34 @@ def test_a_blitted_figure_asks_pyplot_for_no_redraw():
         Gcf.draw_all()
     assert calls == []
     plt.close(ex.fig)
+
+
+@pytest.mark.parametrize("name", sorted(MOVES))
+def test_kept_scene_items_are_what_a_fresh_recording_gives(name):
+    """Unchanged artists' items are reused from the frame before (by ``stale`` and, for
+    colour-mapped collections, by their data array): after every move the scene sent must be
+    the scene a painter with nothing kept records from the same figure."""
+    from course_lib.widgets._canvas import FigureCanvas
+    from course_lib.widgets._scene import unpack
+
+    cls, moves = MOVES[name]
+    ex = cls()
+    ex.update()
+    canvas = ex._view.blitter.widget
+    for attr, value in moves:
+        _control(ex, attr).value = value
+        sent = unpack(canvas.scene)["items"]
+        fresh_painter = _view.ScenePainter(ex.fig, FigureCanvas())
+        fresh_painter.redraw()
+        fresh = unpack(fresh_painter.widget.scene)["items"]
+        ex._view.blitter.background = None          # the fresh painter drew the figure
+        assert [i["k"] for i in sent] == [i["k"] for i in fresh], (name, attr)
+        for a, b in zip(sent, fresh):
+            for key in ("fill", "stroke", "fills", "strokes", "lw", "dash"):
+                assert a.get(key) == b.get(key), (name, attr, key)
+            for key in ("v", "at"):
+                if key in a:
+                    np.testing.assert_allclose(a[key], b[key], rtol=0, atol=1e-3)
+            if "rgba" in a:
+                np.testing.assert_array_equal(a["rgba"], b["rgba"])
+    plt.close(ex.fig)
