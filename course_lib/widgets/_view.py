@@ -154,7 +154,9 @@ class Blitter:
         self._finished = time.perf_counter()
         self._cost = self._finished - start
 
-    def _draw_all(self):
+    def _draw_background(self) -> list:
+        """Draw the figure with Agg without its changing artists (the layout frozen first);
+        returns those artists, visible again. Counts a full draw."""
         fig, canvas = self.fig, self.fig.canvas
         self._freeze_layout()
         dynamic = [a for a in self.dynamic_artists() if a.get_visible()]
@@ -171,10 +173,15 @@ class Blitter:
         for ax in fig.axes:  # a hidden title is placed as if it were not there: place it again
             if hasattr(ax, "_update_title_position"):
                 ax._update_title_position(renderer)
-        self.background = canvas.copy_from_bbox(fig.bbox)
-        self.sprites = SpriteCache(canvas.get_renderer())
         self._signature = self.signature()
         self.full_draws += 1
+        return dynamic
+
+    def _draw_all(self):
+        dynamic = self._draw_background()
+        canvas = self.fig.canvas
+        self.background = canvas.copy_from_bbox(self.fig.bbox)
+        self.sprites = SpriteCache(canvas.get_renderer())
         self._paint(dynamic)
 
     def _freeze_layout(self):
@@ -235,22 +242,8 @@ class ScenePainter(Blitter):
         canvas_widget.on_msg(self._on_msg)
 
     def _draw_all(self):
-        fig, canvas = self.fig, self.fig.canvas
-        self._freeze_layout()
-        dynamic = [a for a in self.dynamic_artists() if a.get_visible()]
-        for a in dynamic:
-            a.set_visible(False)
-        self._own_draw = True
-        try:
-            FigureCanvasAgg.draw(canvas)
-        finally:
-            self._own_draw = False
-            for a in dynamic:
-                a.set_visible(True)
-        renderer = canvas.get_renderer()
-        for ax in fig.axes:  # a hidden title is placed as if it were not there: place it again
-            if hasattr(ax, "_update_title_position"):
-                ax._update_title_position(renderer)
+        dynamic = self._draw_background()
+        renderer = self.fig.canvas.get_renderer()
         with io.BytesIO() as png:
             Image.fromarray(np.asarray(renderer.buffer_rgba())).save(
                 png, format="png", compress_level=1)
@@ -258,8 +251,6 @@ class ScenePainter(Blitter):
         self.background = True
         self._renderer = SceneRenderer(renderer)
         self._kept.clear()
-        self._signature = self.signature()
-        self.full_draws += 1
         self._paint(dynamic, new_background=True)
 
     def _blit(self):
