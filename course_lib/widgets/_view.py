@@ -236,6 +236,7 @@ class ScenePainter(Blitter):
         super().__init__(fig)
         self.widget = canvas_widget
         self._base_dpi = float(fig.dpi)
+        self._ratio = 1.0                  # the page's pixels per CSS pixel, as last reported
         self._renderer = None
         self._kept: dict[int, tuple] = {}
         self._background_png = None
@@ -290,17 +291,23 @@ class ScenePainter(Blitter):
             self._mouse(content)
 
     def _set_ratio(self, ratio):
+        """The page's ``devicePixelRatio`` (0.5 to 4; anything else is ignored): the figure is
+        drawn with that many pixels per CSS pixel."""
         try:
             ratio = float(ratio)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             return
-        if not (0.5 <= ratio <= 4) or ratio == self.widget.ratio:
+        if not (0.5 <= ratio <= 4) or ratio == self._ratio:
             return
-        self.widget.ratio = ratio
+        self._ratio = ratio
         self.fig.set_dpi(self._base_dpi * ratio)
-        self.redraw()
+        with self.widget.hold_sync():
+            self.widget.ratio = ratio
+            self.redraw()
 
     def _mouse(self, content):
+        """A mouse message from the page as a matplotlib event: a press, a move while pressed
+        or a release, at finite display coordinates within the canvas (others are ignored)."""
         from matplotlib.backend_bases import MouseButton, MouseEvent
 
         name = content.get("name")
@@ -309,8 +316,12 @@ class ScenePainter(Blitter):
         try:
             x, y = float(content["x"]), float(content["y"])
             button = MouseButton(int(content.get("button", 1)))
-        except (KeyError, TypeError, ValueError):
+        except (KeyError, TypeError, ValueError, OverflowError):
             return
+        width, height = self.fig.bbox.size
+        if not (math.isfinite(x) and math.isfinite(y)):
+            return
+        x, y = min(max(x, 0.0), width), min(max(y, 0.0), height)
         event = MouseEvent(name, self.fig.canvas, x, y, button=button)
         self.fig.canvas.callbacks.process(name, event)
         if self.fig.stale:  # e.g. a 3-D axes turned by the drag: show it

@@ -160,8 +160,19 @@ def test_mouse_messages_become_matplotlib_events():
     canvas._handle_custom_msg({"type": "mouse", "name": "button_press_event", "x": x, "y": y,
                                "button": 1}, [])
     canvas._handle_custom_msg({"type": "mouse", "name": "no_such_event", "x": x, "y": y}, [])
-    canvas._handle_custom_msg({"type": "mouse", "name": "button_press_event", "x": "?"}, [])
+    for bad in ("?", "nan", "inf", "9" * 400, None):       # ignored, never raised
+        canvas._handle_custom_msg({"type": "mouse", "name": "button_press_event", "x": bad,
+                                   "y": y}, [])
+    canvas._handle_custom_msg({"type": "mouse", "name": "button_press_event", "x": x,
+                               "y": y, "button": 10 ** 400}, [])
+    for bad in ("x", 10 ** 400, float("nan"), 100.0, None):
+        canvas._handle_custom_msg({"type": "ratio", "ratio": bad}, [])
+    canvas._handle_custom_msg("not a dict", [])
     assert seen == [(int(x), int(y), fig.axes[0])]       # matplotlib keeps whole pixels
+    dpi = fig.dpi
+    canvas.ratio = 2.0                                     # the page writes the trait itself
+    canvas._handle_custom_msg({"type": "ratio", "ratio": 2.0}, [])
+    assert fig.dpi == pytest.approx(2 * dpi, abs=1e-9) and canvas.ratio == 2.0
     plt.close(fig)
 
 
