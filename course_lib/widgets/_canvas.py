@@ -89,7 +89,14 @@ function applyClip(ctx, scene, index, H) {
 }
 
 function paintShape(ctx, scene, item, shape, hatches) {
-  if (item.fill) { ctx.fillStyle = item.fill; ctx.fill(shape); }
+  if (item.fill) {
+    ctx.fillStyle = item.fill; ctx.fill(shape);
+    if (item.aa === false && !item.stroke) {   // no antialiasing asked (a colour bar's cells):
+      ctx.strokeStyle = item.fill;             // a canvas always smooths edges, so cover the
+      ctx.lineWidth = 1; ctx.setLineDash([]);  // seams between neighbours with their colour
+      ctx.stroke(shape);
+    }
+  }
   if (item.hatch) {
     ctx.fillStyle = hatchPattern(ctx, scene, item.hatch, item.hv, hatches);
     ctx.fill(shape);
@@ -114,7 +121,7 @@ function paintScene(ctx, scene, scratch, hatches) {
       paintShape(ctx, scene, item, tracePath(scene.V, scene.C, item.v, H, -1), hatches);
     } else if (item.k === "paths") {          // a collection: one colour per path
       let start = item.v[0];
-      const one = {lw: item.lw, cap: item.cap, join: item.join};
+      const one = {lw: item.lw, cap: item.cap, join: item.join, aa: item.aa};
       for (let i = 0; i < item.n.length; i++) {
         const shape = tracePath(scene.V, scene.C, [start, item.n[i]], H, -1);
         start += item.n[i];
@@ -186,7 +193,9 @@ function render({ model, el }) {
     const w = model.get("width"), h = model.get("height");
     if (canvas.width !== w || canvas.height !== h) {
       canvas.width = w; canvas.height = h;
-      canvas.style.width = `${w / ratio}px`; canvas.style.height = `${h / ratio}px`;
+      // the figure's size, shrunk (aspect kept) to a narrower notebook: never cut off
+      canvas.style.width = `${w / ratio}px`; canvas.style.maxWidth = "100%";
+      canvas.style.height = "auto";
     }
     ctx.setTransform(1, 0, 0, 1, 0, 0);
     ctx.clearRect(0, 0, w, h);

@@ -14,7 +14,8 @@ A scene is a list of items, one per primitive::
 
     {"k": "path", "v": vertices (n, 2) float32, "c": codes (n,) uint8,
      "fill": css colour | None, "stroke": css colour | None, "lw": px, "cap", "join",
-     "dash": [offset, on, off, ...] | None, "hatch": {...} | None, "clip": index | None}
+     "dash": [offset, on, off, ...] | None, "hatch": {...} | None, "clip": index | None,
+     "aa": False when matplotlib draws it without antialiasing (else absent)}
     {"k": "markers", "v", "c" (the marker, relative px), "at": offsets (m, 2) float32, ...}
     {"k": "paths", "v", "c" (every path, one after the other), "n": vertices per path,
      "fills", "strokes": css colours, cycled over the paths, "lw", "cap", "join", "clip"}
@@ -179,7 +180,7 @@ class SceneRenderer(RendererBase):
                  "stroke": _css(gc.get_rgb()) if lw > 0 else None,
                  "lw": lw, "cap": _CAPS.get(gc.get_capstyle(), "butt"),
                  "join": gc.get_joinstyle() or "miter", "dash": None, "hatch": None,
-                 "clip": self._clip(gc)}
+                 "aa": None if gc.get_antialiased() else False, "clip": self._clip(gc)}
         offset, dashes = gc.get_dashes()
         if dashes is not None and len(dashes) and style["stroke"] is not None:
             style["dash"] = [float(self.points_to_pixels(offset or 0))] + \
@@ -331,6 +332,7 @@ class SceneRenderer(RendererBase):
         self.items.append({"k": "paths", "v": v, "c": np.concatenate([g[1] for g in geometry]),
                            "n": [len(g[0]) for g in geometry], "fills": fills,
                            "strokes": strokes, "lw": lw,
+                           "aa": None if not len(antialiaseds) or any(antialiaseds) else False,
                            "cap": _CAPS.get(gc.get_capstyle(), "butt"),
                            "join": gc.get_joinstyle() or "miter", "clip": self._clip(gc)})
 

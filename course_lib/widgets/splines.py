@@ -147,7 +147,7 @@ class SplineEndExplorer(FigureExplorer):
         self.y = W.FloatSlider(description="y", min=self.limits[0, 1], max=self.limits[1, 1],
                                step=0.01, continuous_update=True, readout_format=".2f")
         self.show_hull = W.Checkbox(value=True, description="B-spline convex hull")
-        self.formulas = W.HTMLMath(layout=W.Layout(width="420px"))
+        self.formulas = W.HTMLMath(layout=W.Layout(width="420px", overflow="auto"))
         self.status = W.Label()
 
         with plt.ioff():
