@@ -234,13 +234,14 @@ function render({ model, el }) {
   canvas.addEventListener("pointerup", release);
   canvas.addEventListener("pointercancel", release);
 
-  model.on("change:scene", paint);
-  model.on("change:background", paint);
+  // every frame the kernel sends moves `frame` (its scene and background, when they changed,
+  // arrive in the same message, set before this runs): paint once per frame
+  model.on("change:frame", paint);
   model.on("change:ratio", paint);
   paint();
   const ratio = window.devicePixelRatio || 1;
   if (ratio !== model.get("ratio")) model.send({type: "ratio", ratio});
-  return () => { model.off("change:scene", paint); model.off("change:background", paint); };
+  return () => { model.off("change:frame", paint); model.off("change:ratio", paint); };
 }
 
 export default { render };

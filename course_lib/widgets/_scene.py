@@ -112,31 +112,50 @@ class SceneRenderer(RendererBase):
         return True  # one item per image: the browser composites them
 
     def draw_text(self, gc, x, y, s, prop, angle, ismath=False, mtext=None):
-        """Text as filled glyph outlines (matplotlib's ``TextToPath``), laid out by FreeType
-        as Agg lays it out. Outlines of plain text come from :meth:`_outline`'s caches."""
+        """Text as filled glyph outlines (matplotlib's ``TextToPath``), placed where Agg
+        places it. Outlines of plain text come from :meth:`_outline`'s caches.
+
+        ``TextToPath`` lays glyphs out without hinting, Agg with it, so a long label would end
+        a few pixels away from where Agg (and the text's own extent, and a box drawn around
+        it) ends it: the run of glyphs is stretched along its baseline to Agg's width."""
         if ismath:
             self._draw_text_as_path(gc, x, y, s, prop, angle, ismath, mtext)
             return
-        path = self._outline(s, prop, mtext)
+        path, width = self._outline(s, prop, mtext)
         if path is None:
             return
         scale = self.points_to_pixels(prop.get_size_in_points()) / self._text2path.FONT_SCALE
+        stretch = 1.0
+        agg_width = self._agg_width(s, prop)
+        if width > 0 and agg_width > 0:
+            stretch = min(1.25, max(0.8, agg_width / (width * scale)))
         # like _draw_text_as_path: with flipy(), Text.draw handed us y from the top
-        transform = Affine2D().scale(scale).rotate_deg(angle).translate(x, self.height - y)
+        transform = (Affine2D().scale(scale * stretch, scale).rotate_deg(angle)
+                     .translate(x, self.height - y))
         gc.set_linewidth(0.0)
         self.draw_path(gc, path, transform, rgbFace=gc.get_rgb())
 
+    def _agg_width(self, s, prop) -> float:
+        """The width (pixels) Agg gives ``s``: from the cache that ``Text`` layout filled."""
+        try:
+            from matplotlib.text import _get_text_metrics_with_cache
+
+            return float(_get_text_metrics_with_cache(self, s, prop, False, self.dpi)[0])
+        except (ImportError, TypeError):  # a matplotlib without that cache
+            return float(self.get_text_width_height_descent(s, prop, False)[0])
+
     def _outline(self, s, prop, mtext):
-        """The glyph outlines of ``s`` in ``prop`` (at ``TextToPath.FONT_SCALE``), or ``None``
-        for blank text. Matplotlib's ``get_text_path`` reads every glyph from the font again
-        on each call and joins them vertex by vertex; here glyphs are read once per renderer
-        and whole strings are kept (the last 1024), which makes a changed label cheap."""
+        """The glyph outlines of ``s`` in ``prop`` (at ``TextToPath.FONT_SCALE``; ``None`` for
+        blank text) and their unhinted advance width in the same units. Matplotlib's
+        ``get_text_path`` reads every glyph from the font again on each call and joins them
+        vertex by vertex; here glyphs are read once per renderer and whole strings are kept
+        (the last 1024), which makes a changed label cheap."""
         extra = {}
         if mtext is not None and hasattr(mtext, "get_fontfeatures"):
             extra = {"features": mtext.get_fontfeatures(), "language": mtext.get_language()}
         key = (s, hash(prop), repr(sorted(extra.items())))
-        path = self._outlines.pop(key, False)
-        if path is False:
+        entry = self._outlines.pop(key, None)
+        if entry is None:
             text2path = self._text2path
             font = text2path._get_font(prop)
             glyphs, new, _ = text2path.get_glyphs_with_font(
@@ -149,10 +168,12 @@ class SceneRenderer(RendererBase):
                     verts.append(np.asarray(v) * scale + (x, y))
                     codes.append(np.asarray(c))
             path = Path(np.concatenate(verts), np.concatenate(codes)) if verts else None
+            width = text2path.get_text_width_height_descent(s, prop.copy(), False)[0]
+            entry = (path, width * text2path.FONT_SCALE / prop.get_size_in_points())
             if len(self._outlines) >= 1024:
                 self._outlines.pop(next(iter(self._outlines)))
-        self._outlines[key] = path
-        return path
+        self._outlines[key] = entry
+        return entry
 
     # -- the primitives ---------------------------------------------------------------------------
     def _clip(self, gc) -> int | None:
@@ -201,12 +222,16 @@ class SceneRenderer(RendererBase):
         filled = rgbFace is not None or gc.get_hatch() is not None
         margin = lw + 2
         clip = None if filled else (-margin, -margin, self.width + margin, self.height + margin)
-        clean = path.cleaned(transform=transform, remove_nans=True, clip=clip,
+        # cleaned (clipped, simplified, snapped to pixel centres) in Agg's y-down pixels, as
+        # Agg does it: snapping rounds, so doing it in y-up pixels moves a line by one row
+        down = Affine2D().scale(1.0, -1.0).translate(0.0, self.height)
+        clean = path.cleaned(transform=transform + down, remove_nans=True, clip=clip,
                              simplify=path.should_simplify and not filled, curves=True,
                              stroke_width=lw, snap=gc.get_snap())
         v, c = _geometry(clean)
         if not len(v):
             return
+        v[:, 1] = self.height - v[:, 1]
         style = self._style(gc, rgbFace)
         if style["fill"] is None and style["stroke"] is None and style["hatch"] is None:
             return
@@ -412,20 +437,31 @@ def pack(items: list[dict], clips: list[dict], height: float) -> bytes:
 
 def unpack(message: bytes) -> dict:
     """Read a :func:`pack` message back: the header with every ``[start, count]`` replaced by
-    the arrays it points to (the reading the browser does, for the tests)."""
-    if message[:4] != _MAGIC:
-        raise ValueError("message: not a scene (it does not start with b'4F9S')")
-    (n,) = struct.unpack_from("<I", message, 4)
-    header = json.loads(message[8:8 + n])
-    offset = 8 + n
-    nv = header["nv"]
-    verts = np.frombuffer(message, "<f4", 2 * nv, offset).reshape(nv, 2)
-    offset += 8 * nv
-    codes = np.frombuffer(message, np.uint8, nv, offset)
-    offset += nv + (-nv % 4)
+    the arrays it points to (the reading the browser does, for the tests). A damaged or
+    truncated message raises ``ValueError``."""
+    message = bytes(message)
+    try:
+        if message[:4] != _MAGIC:
+            raise ValueError("it does not start with b'4F9S'")
+        (n,) = struct.unpack_from("<I", message, 4)
+        header = json.loads(message[8:8 + n])
+        nv = int(header["nv"])
+        offset = 8 + n
+        verts = np.frombuffer(message, "<f4", 2 * nv, offset).reshape(nv, 2)
+        codes = np.frombuffer(message, np.uint8, nv, offset + 8 * nv)
+        _resolve(header, verts, codes, message, offset + 8 * nv + nv + (-nv % 4))
+    except (ValueError, struct.error, KeyError, TypeError, IndexError) as exc:
+        raise ValueError(f"message: not a whole scene ({exc})") from None
+    return header
+
+
+def _resolve(header: dict, verts, codes, message: bytes, images: int) -> None:
+    """Replace the header's references by the arrays of the message (images at ``images``)."""
 
     def arrays(ref):
         start, count = ref
+        if start < 0 or count < 0 or start + count > len(verts):
+            raise ValueError(f"a reference [{start}, {count}] beyond {len(verts)} vertices")
         return verts[start:start + count], codes[start:start + count]
 
     for item in header["items"]:
@@ -438,8 +474,7 @@ def unpack(message: bytes) -> dict:
         if "o" in item:
             shape = (item["h"], item["w"]) if item["gray"] else (item["h"], item["w"], 4)
             item["rgba"] = np.frombuffer(message, np.uint8, int(np.prod(shape)),
-                                         offset + item["o"]).reshape(shape)
+                                         images + item["o"]).reshape(shape)
     for clip in header["clips"]:
         if "v" in clip:
             clip["v"], clip["c"] = arrays(clip["v"])
-    return header
