@@ -10,6 +10,7 @@ and the byte layout of a packed scene as its docstring specifies it.
 
 from __future__ import annotations
 
+import json
 import re
 import struct
 
@@ -131,7 +132,7 @@ def one_pixel_line(fig, x, y):
     ax.set_ylim(0, 1)
     ax.set_axis_off()
     (line,) = ax.plot(x, y, lw=72 / DPI, color="k", solid_capstyle="butt")
-    scene, (item,) = record(fig, line)
+    _, (item,) = record(fig, line)
     grey = np.asarray(fig.canvas.buffer_rgba())[..., 0].astype(int)
     return item, grey
 
@@ -205,7 +206,7 @@ def test_text_outline_fills_its_window_extent(fig, rotation):
     """The glyph outlines cover the box matplotlib lays the text out in (Agg's metrics).
     "depth (mm)" has ascenders and descenders, so ink reaches the box's top and bottom."""
     text = fig.text(0.3, 0.4, "depth (mm)", fontsize=10, rotation=rotation, color="darkred")
-    scene, (item,) = record(fig, text)
+    _, (item,) = record(fig, text)
     box = text.get_window_extent(fig.canvas.get_renderer()).extents
     np.testing.assert_allclose(extents(item), box, atol=2.0)
     assert_colour(item["fill"], "darkred")
@@ -388,8 +389,6 @@ def test_pack_layout_is_four_byte_aligned(fig, ax):
     assert message[:4] == b"4F9S"
     (n,) = struct.unpack_from("<I", message, 4)
     assert (8 + n) % 4 == 0                            # the vertices start 4-byte aligned
-    import json
-
     header = json.loads(message[8:8 + n])
     nv = header["nv"]
     image_bytes = sum(i["rgba"].nbytes for i in scene.items if i["k"] == "image")
@@ -419,7 +418,8 @@ def test_unpack_rejects_bytes_that_are_not_a_scene(message):
     "size': none is a ValueError naming `message`"))
 @pytest.mark.parametrize("cut", ["magic only", "bad header", "truncated"])
 def test_unpack_rejects_a_damaged_scene(fig, ax, cut):
-    whole = pack(*(lambda s: (s.items, s.clips, s.height))(a_scene(fig, ax)))
+    scene = a_scene(fig, ax)
+    whole = pack(scene.items, scene.clips, scene.height)
     message = {"magic only": b"4F9S",
                "bad header": b"4F9S" + struct.pack("<I", 4) + b"{}  ",
                "truncated": whole[:-100]}[cut]
