@@ -1,7 +1,8 @@
 """The explorers in a real JupyterLab in a real browser (issue: interactive explorers).
 
 For the q4 and q5 notebooks: open the notebook, run all cells, find the explorer's figure,
-move a control, and assert that the rendered figure changed (pixels of the ipympl canvas).
+move a control, and assert that the rendered figure changed (pixels of the explorer's
+browser-painted ``canvas.course-figure-canvas``, issue 15).
 Also check that nbgrader's JupyterLab extension is there for students (the Validate button and
 the Nbgrader menu). Screenshots are kept under ``test-artifacts/browser/``.
 """
@@ -16,6 +17,9 @@ import numpy as np
 import pytest
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.xdist_group("browser")]
+
+#: the explorers' figure: a ``FigureCanvas`` widget painted by the page (issue 15)
+FIGURE_CANVAS = "canvas.course-figure-canvas"
 
 
 def open_and_run_all(page, base, token, name, artifacts, timeout_s=240):
@@ -73,7 +77,7 @@ def wait_for_change(locator, before, timeout_s=20.0, min_fraction=0.002):
 def explorer_output(page, control_text):
     """The output area holding the explorer whose controls include ``control_text``."""
     out = page.locator(".jp-OutputArea-output").filter(
-        has=page.locator(".jupyter-matplotlib")).filter(has_text=control_text).first
+        has=page.locator(FIGURE_CANVAS)).filter(has_text=control_text).first
     out.wait_for(timeout=60_000)
     return out
 
@@ -92,7 +96,7 @@ def test_spline_explorer_end_rule_changes_figure(page, lab_server, artifacts):
     base, token, _ = lab_server
     open_and_run_all(page, base, token, "q4_splines.ipynb", artifacts)
     out = explorer_output(page, "end rule")
-    canvas = out.locator(".jupyter-matplotlib-canvas-div").first
+    canvas = out.locator(FIGURE_CANVAS).first
     before = canvas_pixels(canvas)
     out.screenshot(path=str(artifacts / "q4-explorer-before.png"))
     # switch the spline kind and the end rule: the curve and its end point must move
@@ -107,7 +111,7 @@ def test_phong_explorer_controls_change_figure(page, lab_server, artifacts):
     base, token, _ = lab_server
     open_and_run_all(page, base, token, "q5_phong.ipynb", artifacts)
     out = explorer_output(page, "ka (ambient)")
-    canvas = out.locator(".jupyter-matplotlib-canvas-div").first
+    canvas = out.locator(FIGURE_CANVAS).first
     before = canvas_pixels(canvas)
     out.screenshot(path=str(artifacts / "q5-explorer-before.png"))
     # move the light-azimuth slider with the keyboard, as a user would

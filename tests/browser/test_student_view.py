@@ -55,7 +55,7 @@ def test_student_run_all_on_untouched_notebook_renders_explorers(page, student_l
     """A student opens an untouched release notebook and chooses Run All: the stubs and the
     failing tests show their errors (their cells carry the ``raises-exception`` tag), and every
     cell below them still runs, so the figures and the explorer render."""
-    from test_explorers_in_lab import _wait_idle, canvas_pixels
+    from test_explorers_in_lab import FIGURE_CANVAS, _wait_idle, canvas_pixels
 
     base, query = student_lab.split("/lab", 1)[0], student_lab.split("?", 1)[1]
     page.goto(f"{base}/lab/tree/tripos2006/q5_phong.ipynb?{query}")
@@ -65,12 +65,12 @@ def test_student_run_all_on_untouched_notebook_renders_explorers(page, student_l
     page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
     time.sleep(1.0)
     _wait_idle(page, 300)
-    # the explorer (the last code cell) rendered: an ipympl canvas that is not blank
-    out = page.locator(".jp-OutputArea-output").filter(has=page.locator(".jupyter-matplotlib")).first
+    # the explorer (the last code cell) rendered: its figure canvas is not blank
+    out = page.locator(".jp-OutputArea-output").filter(has=page.locator(FIGURE_CANVAS)).first
     out.wait_for(timeout=120_000)
     _wait_idle(page, 120)
     page.screenshot(path=str(artifacts / "student-run-all.png"))
-    canvas = out.locator(".jupyter-matplotlib-canvas-div").first
+    canvas = out.locator(FIGURE_CANVAS).first
     pixels = canvas_pixels(canvas)
     out.screenshot(path=str(artifacts / "student-run-all-explorer.png"))
     assert pixels.size and float(pixels.std()) > 5.0, "the explorer's canvas is blank"
