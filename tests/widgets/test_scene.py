@@ -145,10 +145,6 @@ def test_snapped_vertical_line_is_on_the_column_agg_paints(fig):
     np.testing.assert_allclose(item["v"][:, 0], column + 0.5, atol=0.25)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "SceneRenderer.draw_path snaps (Path.cleaned(snap=...)) in matplotlib's y-up display "
-    "pixels; Agg snaps after flipping to y-down, so a snapped horizontal stroke of odd width "
-    "(spines, axhline, rectangle edges) is recorded one pixel above the row Agg paints"))
 @pytest.mark.parametrize("y", [0.3137, 0.5, 0.7761])
 def test_snapped_horizontal_line_is_on_the_row_agg_paints(fig, y):
     item, grey = one_pixel_line(fig, [0.1, 0.9], [y, y])
@@ -231,10 +227,6 @@ def test_text_outline_covers_the_pixels_agg_paints(fig, rotation):
     np.testing.assert_allclose(extents(item), agg_ink_extents(fig), atol=2.0)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "SceneRenderer.draw_text lays glyphs out with TextToPath's unhinted advances, while Agg "
-    "(text.hinting force_autohint) and the text's window extent use hinted ones: a 15-glyph "
-    "label at 10 pt ends ~8 px away from where Agg ends it"))
 def test_long_text_ends_where_agg_ends_it(fig):
     text = fig.text(0.05, 0.5, "m" * 15, fontsize=10)
     _, (item,) = record(fig, text)
@@ -301,9 +293,17 @@ def test_axes_image_keeps_the_data_resolution_and_smooths_when_asked(fig):
     scene = SceneRenderer(fig.canvas.get_renderer())
     scene.draw_axes_image(image)
     (item,) = scene.items
-    assert item["rgba"].shape == (5, 7, 4) and item["smooth"] is True
+    # an opaque grey image goes as one byte per pixel
+    assert item["rgba"].shape == (5, 7) and item["smooth"] is True
     # the colour of each pixel is the colormap's at the data value (origin upper: row 0 on top)
-    expected = (np.asarray(plt.get_cmap("gray")(data)) * 255)[..., :3]
+    expected = (np.asarray(plt.get_cmap("gray")(data)) * 255)[..., 0]
+    np.testing.assert_allclose(item["rgba"], expected, atol=1.0)
+    coloured = ax.imshow(data, cmap="viridis", interpolation="nearest", aspect="auto")
+    scene.items = []
+    scene.draw_axes_image(coloured)
+    (item,) = scene.items
+    assert item["rgba"].shape == (5, 7, 4) and item["smooth"] is False
+    expected = (np.asarray(plt.get_cmap("viridis")(data)) * 255)[..., :3]
     np.testing.assert_allclose(item["rgba"][..., :3], expected, atol=1.0)
 
 
@@ -361,9 +361,11 @@ def test_pack_unpack_round_trip(fig, ax):
     assert header["height"] == scene.height
     assert len(header["items"]) == len(scene.items)
     for got, sent in zip(header["items"], scene.items):
-        lost = {k for k, v in sent.items() if v is not None} - set(got)
+        lost = {k for k, v in sent.items() if v is not None and not k.startswith("_")} - set(got)
         assert not lost, f"keys lost: {lost}"
         for key, value in sent.items():
+            if key.startswith("_"):  # pack's own memo of the item's fixed fields
+                continue
             if value is None:      # pack leaves out an absent hatch: the page reads undefined
                 assert got.get(key) is None, key
             elif key == "hatch":
@@ -412,10 +414,6 @@ def test_unpack_rejects_bytes_that_are_not_a_scene(message):
         unpack(message)
 
 
-@pytest.mark.xfail(strict=True, raises=(AssertionError, struct.error, KeyError), reason=(
-    "_scene.unpack checks only the 4-byte magic: b'4F9S' alone raises struct.error, a header "
-    "without 'nv' a KeyError, a truncated message numpy's 'buffer is smaller than requested "
-    "size': none is a ValueError naming `message`"))
 @pytest.mark.parametrize("cut", ["magic only", "bad header", "truncated"])
 def test_unpack_rejects_a_damaged_scene(fig, ax, cut):
     scene = a_scene(fig, ax)
