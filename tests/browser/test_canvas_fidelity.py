@@ -219,9 +219,16 @@ def moved_slider_pictures(page, lab_server, artifacts, which, name):
     for _ in range(presses):
         handle.press(key)
     after = report(page, facts_path)
+    agg = png_rgb(png)
+    if np.ptp(agg) == 0:
+        # Seen twice in full `make test` runs (B-scan, machine loaded), never alone: the
+        # kernel's savefig gave a blank page although the figure's texts were visible. Not
+        # understood yet (see the closing note of issue 15): save once more and say so.
+        (artifacts / f"{name}-blank-savefig.txt").write_text(json.dumps(after))
+        after = report(page, facts_path)
+        agg = png_rgb(png)
     assert after["frame"] > before["frame"], "the slider sent no frame"
     shown = canvas_rgb(canvas, after["frame"])
-    agg = png_rgb(png)
     Image.fromarray(shown.astype(np.uint8)).save(artifacts / f"{name}-canvas.png")
     Image.fromarray(agg.astype(np.uint8)).save(artifacts / f"{name}-agg.png")
     assert shown.shape == agg.shape, f"canvas {shown.shape[:2]} vs figure {agg.shape[:2]}"
