@@ -21,7 +21,6 @@ outside a git checkout for the "before" code, the rows say what was not measured
 
 from __future__ import annotations
 
-import json
 import os
 import re
 import secrets
@@ -170,13 +169,13 @@ def write_notebook(path: Path, package: str, module: str, factory: str,
     setup = "" if package == "course_lib" else "%matplotlib widget\n"
     if extra_path is not None:
         setup += f"import sys\nsys.path.insert(0, {str(extra_path)!r})\n"
+    import nbformat
+
     cells = [setup, f"from {package}.widgets.{module} import {factory}\n{factory}()"]
-    nb = {"nbformat": 4, "nbformat_minor": 5,
-          "metadata": {"kernelspec": {"name": "python3", "display_name": "Python 3",
-                                      "language": "python"}},
-          "cells": [{"cell_type": "code", "id": f"c{i}", "metadata": {}, "outputs": [],
-                     "execution_count": None, "source": src} for i, src in enumerate(cells)]}
-    path.write_text(json.dumps(nb))
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(c) for c in cells])
+    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
+                                 "language": "python"}
+    nbformat.write(nb, path)
 
 
 def run_notebook(page, base: str, token: str, name: str) -> None:

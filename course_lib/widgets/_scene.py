@@ -40,6 +40,11 @@ from matplotlib.backend_bases import RendererBase
 from matplotlib.path import Path
 from matplotlib.transforms import Affine2D
 
+try:  # Text's cache of text metrics, keyed by renderer (private to matplotlib)
+    from matplotlib.text import _get_text_metrics_with_cache as _text_metrics
+except ImportError:  # pragma: no cover - a matplotlib without it
+    _text_metrics = None
+
 __all__ = ["SceneRenderer", "pack", "unpack"]
 
 _CAPS = {"butt": "butt", "round": "round", "projecting": "square"}
@@ -137,12 +142,12 @@ class SceneRenderer(RendererBase):
 
     def _agg_width(self, s, prop) -> float:
         """The width (pixels) Agg gives ``s``: from the cache that ``Text`` layout filled."""
-        try:
-            from matplotlib.text import _get_text_metrics_with_cache
-
-            return float(_get_text_metrics_with_cache(self, s, prop, False, self.dpi)[0])
-        except (ImportError, TypeError):  # a matplotlib without that cache
-            return float(self.get_text_width_height_descent(s, prop, False)[0])
+        if _text_metrics is not None:
+            try:
+                return float(_text_metrics(self, s, prop, False, self.dpi)[0])
+            except TypeError:  # another signature than matplotlib 3.7-3.11's
+                pass
+        return float(self.get_text_width_height_descent(s, prop, False)[0])
 
     def _outline(self, s, prop, mtext):
         """The glyph outlines of ``s`` in ``prop`` (at ``TextToPath.FONT_SCALE``; ``None`` for
@@ -168,7 +173,7 @@ class SceneRenderer(RendererBase):
                     verts.append(np.asarray(v) * scale + (x, y))
                     codes.append(np.asarray(c))
             path = Path(np.concatenate(verts), np.concatenate(codes)) if verts else None
-            width = text2path.get_text_width_height_descent(s, prop.copy(), False)[0]
+            width = text2path.get_text_width_height_descent(s, prop, False)[0]
             entry = (path, width * text2path.FONT_SCALE / prop.get_size_in_points())
             if len(self._outlines) >= 1024:
                 self._outlines.pop(next(iter(self._outlines)))
@@ -325,28 +330,23 @@ class SceneRenderer(RendererBase):
         collimator's hundreds of holes); otherwise one ``draw_path`` per path, as matplotlib's
         base renderer does."""
         offsets = np.asarray(offsets, dtype=float).reshape(-1, 2)
-        simple = (len(paths) > 0 and len(all_transforms) == 0 and len(offsets) <= 1
-                  and len(linewidths) <= 1 and all(d is None for _, d in linestyles)
-                  and gc.get_hatch() is None)
-        if not simple:
+        v = None
+        if (len(paths) > 0 and len(all_transforms) == 0 and len(offsets) <= 1
+                and len(linewidths) <= 1 and all(d is None for _, d in linestyles)
+                and gc.get_hatch() is None):
+            transform = master_transform
+            if len(offsets):
+                xo, yo = offset_trans.transform(offsets[0])
+                transform = master_transform + Affine2D().translate(xo, yo)
+            geometry = [_geometry(p) for p in paths]
+            v = np.concatenate([g[0] for g in geometry]).astype(np.float64)
+            v = np.asarray(transform.transform(v), dtype=np.float32)
+        if v is None or not np.isfinite(v).all():
             super().draw_path_collection(gc, master_transform, paths, all_transforms, offsets,
                                          offset_trans, facecolors, edgecolors, linewidths,
                                          linestyles, antialiaseds, urls, offset_position,
                                          **kwargs)
             return
-        transform = master_transform
-        if len(offsets):
-            xo, yo = offset_trans.transform(offsets[0])
-            transform = master_transform + Affine2D().translate(xo, yo)
-        geometry = [_geometry(p) for p in paths]
-        v = np.concatenate([g[0] for g in geometry]).astype(np.float64)
-        v = np.asarray(transform.transform(v), dtype=np.float32)
-        keep = np.isfinite(v).all(axis=1)
-        if not keep.all():
-            return super().draw_path_collection(gc, master_transform, paths, all_transforms,
-                                                offsets, offset_trans, facecolors, edgecolors,
-                                                linewidths, linestyles, antialiaseds, urls,
-                                                offset_position, **kwargs)
         lw = float(self.points_to_pixels(linewidths[0] if len(linewidths) else
                                          gc.get_linewidth()))
         forced = gc.get_alpha() if gc.get_forced_alpha() else None

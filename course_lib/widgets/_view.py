@@ -23,7 +23,7 @@ encoded it as a PNG, sent it, and the page decoded it. Of the approaches weighed
   one description of every figure and replaces only its rasteriser: the background is drawn by
   Agg when the geometry changes, and each update records the changing artists with a
   :class:`~course_lib.widgets._scene.SceneRenderer` (paths, markers, glyph outlines and images
-  in display pixels) and sends that scene, a few kB, to the page, which paints background and
+  in display pixels) and sends that scene (16-250 kB) to the page, which paints background and
   scene in one task: one frame per update, nothing half drawn.
 
 :class:`Blitter` remains the base of :class:`ScenePainter` (the split into background and
@@ -45,6 +45,7 @@ import ipywidgets as W
 import numpy as np
 from PIL import Image
 from matplotlib.axes import Axes
+from matplotlib.backend_bases import MouseButton, MouseEvent
 from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg
 from matplotlib.collections import Collection
 from matplotlib.image import AxesImage
@@ -239,17 +240,15 @@ class ScenePainter(Blitter):
         self._ratio = 1.0                  # the page's pixels per CSS pixel, as last reported
         self._renderer = None
         self._kept: dict[int, tuple] = {}
-        self._background_png = None
         canvas_widget.on_msg(self._on_msg)
 
     def _draw_all(self):
         dynamic = self._draw_background()
         renderer = self.fig.canvas.get_renderer()
-        with io.BytesIO() as png:
+        with io.BytesIO() as png:  # the background, as the page will show it
             Image.fromarray(np.asarray(renderer.buffer_rgba())).save(
                 png, format="png", compress_level=1)
-            self._background_png = png.getvalue()
-        self.background = True
+            self.background = png.getvalue()
         self._renderer = SceneRenderer(renderer)
         self._kept.clear()
         self._paint(dynamic, new_background=True)
@@ -258,7 +257,7 @@ class ScenePainter(Blitter):
         self.blits += 1
         self._paint(self.dynamic_artists())
 
-    def _paint(self, artists, sprites=None, new_background=False):
+    def _paint(self, artists, new_background=False):
         scene = self._renderer
         items = []
         for a in artists:
@@ -279,7 +278,7 @@ class ScenePainter(Blitter):
             items.extend(scene.items)
         width, height = (int(round(v)) for v in self.fig.bbox.size)
         self.widget.show(scene=pack(items, scene.clips, scene.height), size=(width, height),
-                         background=self._background_png if new_background else None)
+                         background=self.background if new_background else None)
 
     # -- messages from the page -------------------------------------------------------------
     def _on_msg(self, _widget, content, _buffers):
@@ -308,8 +307,6 @@ class ScenePainter(Blitter):
     def _mouse(self, content):
         """A mouse message from the page as a matplotlib event: a press, a move while pressed
         or a release, at finite display coordinates within the canvas (others are ignored)."""
-        from matplotlib.backend_bases import MouseButton, MouseEvent
-
         name = content.get("name")
         if name not in ("button_press_event", "motion_notify_event", "button_release_event"):
             return

@@ -109,15 +109,25 @@ _PIXELS_JS = """
 
 
 def write_notebook(path, module, factory, png, facts, prelude=""):
+    import nbformat
+
     cells = ["%matplotlib widget\n" + prelude,
              f"from course_lib.widgets.{module} import {factory}\nex = {factory}()\nex",
              _REPORT_CELL.format(png=str(png), facts=str(facts))]
-    nb = {"nbformat": 4, "nbformat_minor": 5,
-          "metadata": {"kernelspec": {"name": "python3", "display_name": "Python 3",
-                                      "language": "python"}},
-          "cells": [{"cell_type": "code", "id": f"c{i}", "metadata": {}, "outputs": [],
-                     "execution_count": None, "source": src} for i, src in enumerate(cells)]}
-    path.write_text(json.dumps(nb))
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(c) for c in cells])
+    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3",
+                                 "language": "python"}
+    nbformat.write(nb, path)
+
+
+def open_explorer(page, lab_server, name, module, factory):
+    """Run explorer ``module.factory`` in a fresh scratch notebook ``name``: returns the
+    canvas, the facts file and the kernel's first report."""
+    base, token, root = lab_server
+    notebook, png, facts_path = scratch(root, name)
+    write_notebook(notebook, module, factory, png, facts_path)
+    canvas = run_all(page, base, token, notebook.name)
+    return canvas, png, facts_path, report(page, facts_path)
 
 
 def run_all(page, base, token, name):
@@ -208,11 +218,7 @@ def moved_slider_pictures(page, lab_server, artifacts, which, name):
     from PIL import Image
 
     module, factory, description, key, presses = FIDELITY[which]
-    base, token, root = lab_server
-    notebook, png, facts_path = scratch(root, name)
-    write_notebook(notebook, module, factory, png, facts_path)
-    canvas = run_all(page, base, token, notebook.name)
-    before = report(page, facts_path)
+    canvas, png, facts_path, before = open_explorer(page, lab_server, name, module, factory)
     shown_before = canvas_rgb(canvas, before["frame"], strict=False)
     handle = slider_handle(page, description)
     handle.focus()
@@ -311,11 +317,8 @@ def test_canvas_matches_a_full_agg_draw_after_a_slider_move(page, lab_server, ar
 
 
 def test_dragging_a_spline_point_moves_it_in_the_kernel(page, lab_server, artifacts):
-    base, token, root = lab_server
-    notebook, png, facts_path = scratch(root, "drag-spline")
-    write_notebook(notebook, "splines", "spline_end_explorer", png, facts_path)
-    canvas = run_all(page, base, token, notebook.name)
-    before = report(page, facts_path)
+    canvas, _, facts_path, before = open_explorer(page, lab_server, "drag-spline", "splines",
+                                                  "spline_end_explorer")
     shown_before = canvas_rgb(canvas, before["frame"], strict=False)
     canvas.scroll_into_view_if_needed()         # the button click scrolled the page
     box = canvas.bounding_box()
@@ -353,11 +356,8 @@ def test_dragging_a_spline_point_moves_it_in_the_kernel(page, lab_server, artifa
 
 def test_every_frame_is_counted(page, lab_server, artifacts):
     """The canvas' data-frame counts the frames the kernel sent, as _canvas documents."""
-    base, token, root = lab_server
-    notebook, png, facts_path = scratch(root, "frames")
-    write_notebook(notebook, "shading", "phong_explorer", png, facts_path)
-    canvas = run_all(page, base, token, notebook.name)
-    first = report(page, facts_path)
+    canvas, _, facts_path, first = open_explorer(page, lab_server, "frames", "shading",
+                                                 "phong_explorer")
     canvas_rgb(canvas, first["frame"], strict=False)
     page.locator("button", has_text="redraw unchanged").first.click()
     second = report(page, facts_path)
