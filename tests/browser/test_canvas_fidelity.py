@@ -111,7 +111,9 @@ _PIXELS_JS = """
 def write_notebook(path, module, factory, png, facts, prelude=""):
     import nbformat
 
-    cells = ["%matplotlib widget\n" + prelude,
+    # no `%matplotlib widget`, as in the course's notebooks: with it (ipympl's canvas, which
+    # the explorer closes) the kernel's savefig came out blank now and then under load
+    cells = [prelude or "pass",
              f"from course_lib.widgets.{module} import {factory}\nex = {factory}()\nex",
              _REPORT_CELL.format(png=str(png), facts=str(facts))]
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(c) for c in cells])
@@ -226,10 +228,10 @@ def moved_slider_pictures(page, lab_server, artifacts, which, name):
         handle.press(key)
     after = report(page, facts_path)
     agg = png_rgb(png)
-    if np.ptp(agg) == 0:
-        # Seen twice in full `make test` runs (B-scan, machine loaded), never alone: the
-        # kernel's savefig gave a blank page although the figure's texts were visible. Not
-        # understood yet (see the closing note of issue 15): save once more and say so.
+    if np.mean(agg.min(axis=-1) < 250) < 0.01:   # (nearly) blank: no axes drawn
+        # Seen in full `make test` runs (machine loaded, never alone) while these notebooks
+        # ran under `%matplotlib widget`: the kernel's savefig gave a (nearly) blank page.
+        # Not understood (closing note of issue 15): save once more and say so.
         (artifacts / f"{name}-blank-savefig.txt").write_text(json.dumps(after))
         after = report(page, facts_path)
         agg = png_rgb(png)
