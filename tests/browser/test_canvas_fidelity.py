@@ -228,15 +228,17 @@ def moved_slider_pictures(page, lab_server, artifacts, which, name):
         handle.press(key)
     after = report(page, facts_path)
     agg = png_rgb(png)
-    if np.mean(agg.min(axis=-1) < 250) < 0.01:   # (nearly) blank: no axes drawn
-        # Seen in full `make test` runs (machine loaded, never alone) while these notebooks
-        # ran under `%matplotlib widget`: the kernel's savefig gave a (nearly) blank page.
-        # Not understood (closing note of issue 15): save once more and say so.
+    shown = canvas_rgb(canvas, after["frame"])
+    if shown.shape == agg.shape and np.abs(shown - agg).mean() > 15:  # usual: 1-5 levels
+        # Seen in full `make test` runs (machine loaded, never alone): the kernel's savefig
+        # came out blank or drawn only at the top, as if another draw of the figure had
+        # cleared the shared Agg renderer half way. Not understood (closing note of issue
+        # 15): save once more and say so.
         (artifacts / f"{name}-blank-savefig.txt").write_text(json.dumps(after))
         after = report(page, facts_path)
         agg = png_rgb(png)
+        shown = canvas_rgb(canvas, after["frame"])
     assert after["frame"] > before["frame"], "the slider sent no frame"
-    shown = canvas_rgb(canvas, after["frame"])
     Image.fromarray(shown.astype(np.uint8)).save(artifacts / f"{name}-canvas.png")
     Image.fromarray(agg.astype(np.uint8)).save(artifacts / f"{name}-agg.png")
     assert shown.shape == agg.shape, f"canvas {shown.shape[:2]} vs figure {agg.shape[:2]}"
