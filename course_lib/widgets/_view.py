@@ -36,9 +36,11 @@ what the browser's picture relies on.
 from __future__ import annotations
 
 import asyncio
+import functools
 import io
 import math
 import sys
+import threading
 import time
 
 import ipywidgets as W
@@ -55,7 +57,58 @@ from matplotlib.layout_engine import PlaceHolderLayoutEngine
 
 from ._scene import SceneRenderer, pack
 
-__all__ = ["Blitter", "FigureExplorer", "FigureView", "ScenePainter", "use_blitting"]
+__all__ = ["Blitter", "ExplorerCanvas", "FigureExplorer", "FigureView", "ScenePainter",
+           "figure_lock", "one_at_a_time", "use_blitting"]
+
+
+# -- one thread at a time on a figure --------------------------------------------------------------
+# In JupyterLab 4 with ipykernel 7 the widgets' messages (a slider moved, a button clicked, the
+# canvas' mouse) are handled in a kernel *subshell* thread, while the cells run in the main
+# thread: an explorer may update and redraw its figure while a cell saves it. Both draw with
+# the canvas' one Agg renderer, and savefig encodes the PNG straight from that renderer's buffer
+# (with the GIL released): a redraw at that moment cleared it, and the file came out blank or
+# drawn only in its top rows (seen in the browser tests under load; reproduced by
+# tests/widgets/test_view.py::test_a_figure_saved_while_the_explorer_redraws_is_whole).
+# So an explorer's update, its redraws and any draw or save of its figure hold one lock.
+
+_LOCKS_LOCK = threading.Lock()
+
+
+def figure_lock(fig) -> threading.RLock:
+    """The lock that an explorer's updates and every draw or save of ``fig`` hold (re-entrant:
+    an update may redraw). Kept on the figure, since savefig to another format swaps its
+    canvas for a while."""
+    lock = fig.__dict__.get("_explorer_lock")
+    if lock is None:
+        with _LOCKS_LOCK:
+            lock = fig.__dict__.setdefault("_explorer_lock", threading.RLock())
+    return lock
+
+
+def one_at_a_time(update):
+    """Decorate an explorer's ``update`` method: it runs holding :func:`figure_lock` of
+    ``self.fig``, so no other thread draws or saves the figure half-way through it."""
+
+    @functools.wraps(update)
+    def locked(self, *args, **kwargs):
+        with figure_lock(self.fig):
+            return update(self, *args, **kwargs)
+
+    return locked
+
+
+class ExplorerCanvas(FigureCanvasAgg):
+    """An explorer figure's Agg canvas: draws and saves (``savefig``) hold
+    :func:`figure_lock`, so a cell saving the figure and a widget callback redrawing it in
+    another thread take turns instead of sharing the renderer half-way."""
+
+    def draw(self):
+        with figure_lock(self.figure):
+            super().draw()
+
+    def print_figure(self, *args, **kwargs):
+        with figure_lock(self.figure):
+            return super().print_figure(*args, **kwargs)
 
 
 class Blitter:
@@ -130,21 +183,23 @@ class Blitter:
         that arrives meanwhile is shown by that one frame. Without a running event loop
         (headless, the tests) every redraw happens at once.
         """
-        if self._deferred is None:
-            wait = self._cost - (time.perf_counter() - self._finished)
-            loop = _running_loop() if wait > 0 else None
-            if loop is None:
-                self._redraw_now()
-            else:
-                self._deferred = loop.call_later(wait, self._redraw_deferred)
-        # else: the frame already scheduled will show this state too. Either way the figure
-        # is taken care of: a stale figure would make pyplot's post_execute hook call
-        # draw_idle, a full redraw.
-        self.fig.stale = False
+        with figure_lock(self.fig):
+            if self._deferred is None:
+                wait = self._cost - (time.perf_counter() - self._finished)
+                loop = _running_loop() if wait > 0 else None
+                if loop is None:
+                    self._redraw_now()
+                else:
+                    self._deferred = loop.call_later(wait, self._redraw_deferred)
+            # else: the frame already scheduled will show this state too. Either way the
+            # figure is taken care of: a stale figure would make pyplot's post_execute hook
+            # call draw_idle, a full redraw.
+            self.fig.stale = False
 
     def _redraw_deferred(self):
-        self._deferred = None
-        self._redraw_now()
+        with figure_lock(self.fig):
+            self._deferred = None
+            self._redraw_now()
 
     def _redraw_now(self):
         start = time.perf_counter()
@@ -298,9 +353,9 @@ class ScenePainter(Blitter):
             return
         if not (0.5 <= ratio <= 4) or ratio == self._ratio:
             return
-        self._ratio = ratio
-        self.fig.set_dpi(self._base_dpi * ratio)
-        with self.widget.hold_sync():
+        with figure_lock(self.fig), self.widget.hold_sync():
+            self._ratio = ratio
+            self.fig.set_dpi(self._base_dpi * ratio)
             self.widget.ratio = ratio
             self.redraw()
 
@@ -319,14 +374,15 @@ class ScenePainter(Blitter):
         if not (math.isfinite(x) and math.isfinite(y)):
             return
         x, y = min(max(x, 0.0), width), min(max(y, 0.0), height)
-        event = MouseEvent(name, self.fig.canvas, x, y, button=button)
-        self.fig.canvas.callbacks.process(name, event)
-        if self.fig.stale:  # e.g. a 3-D axes turned by the drag: show it
-            self.redraw()
+        with figure_lock(self.fig):
+            event = MouseEvent(name, self.fig.canvas, x, y, button=button)
+            self.fig.canvas.callbacks.process(name, event)
+            if self.fig.stale:  # e.g. a 3-D axes turned by the drag: show it
+                self.redraw()
 
 
 def _plain_agg_canvas(fig) -> None:
-    """Make ``fig`` the browser canvas' own: out of pyplot, on a plain Agg canvas.
+    """Make ``fig`` the browser canvas' own: out of pyplot, on an :class:`ExplorerCanvas`.
 
     pyplot would otherwise keep the figure as its current one (a student's next ``plt.plot``
     would draw into the explorer, and the inline backend would show it again as a picture).
@@ -336,8 +392,8 @@ def _plain_agg_canvas(fig) -> None:
     if pyplot is not None:
         pyplot.close(fig)
     old = fig.canvas
-    if type(old) is not FigureCanvasAgg:
-        FigureCanvasAgg(fig)
+    if type(old) is not ExplorerCanvas:
+        ExplorerCanvas(fig)
         if isinstance(old, W.Widget):
             old.close()
 

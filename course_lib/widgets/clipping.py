@@ -26,7 +26,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from .. import clipping
 from ..plots.clipping import _closed, plot_clipping_2d, plot_view_volume, screen_points
-from ._view import FigureView
+from ._view import FigureView, one_at_a_time
 
 #: A triangle that sticks out of the volume through four planes, w != 1 for two vertices.
 DEFAULT_POLYGON = np.array([
@@ -181,6 +181,7 @@ class ClippingExplorer:
 
     # -- drawing -------------------------------------------------------------------------------
 
+    @one_at_a_time
     def update(self, recompute: bool = True):
         """Recompute the clipping steps (if the polygon changed) and update every artist."""
         t0 = time.perf_counter()

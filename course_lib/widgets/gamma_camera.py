@@ -53,7 +53,7 @@ from matplotlib.transforms import Affine2D
 from .. import gamma_camera as gc
 from ..plotting import COLOURS
 from ..plots.gamma_camera import OPEN, SEPTUM, SHUT
-from ._view import FigureExplorer
+from ._view import FigureExplorer, one_at_a_time
 
 __all__ = ["CollimatorExplorer", "EXAM_SETTINGS", "collimator_explorer", "face_radius",
            "hole_draw_radius"]
@@ -234,6 +234,7 @@ class CollimatorExplorer(FigureExplorer):
     def controls(self):
         return (self.d, self.L, self.z, self.pitch, self.n_rings)
 
+    @one_at_a_time
     def update(self):
         """Recompute, change the artists in place, refresh the readout and redraw."""
         with self.readout.hold_sync():  # the figure's frame goes first, the readout after it

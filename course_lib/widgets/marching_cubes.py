@@ -26,7 +26,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from .. import marching_cubes as mc
-from ._view import FigureExplorer
+from ._view import FigureExplorer, one_at_a_time
 from ..plots.marching_cubes import case_values, draw_case, update_case
 
 __all__ = ["CaseExplorer", "case_explorer", "case_summary"]
@@ -120,6 +120,7 @@ class CaseExplorer(FigureExplorer):
         """The corner values of the current case (0 inside, 1 outside)."""
         return case_values(self.index.value)
 
+    @one_at_a_time
     def update(self):
         """Move the triangles and corner colours to the current controls and redraw."""
         index = self.index.value

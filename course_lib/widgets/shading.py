@@ -33,7 +33,7 @@ import numpy as np
 
 from .. import shading
 from ..plots.shading import sphere_pair, update_sphere_pair
-from ._view import FigureExplorer
+from ._view import FigureExplorer, one_at_a_time
 from ..plotting import new_figure
 
 __all__ = ["PhongExplorer", "angles", "direction", "hex_to_rgb", "phong_explorer", "rgb_to_hex"]
@@ -184,6 +184,7 @@ class PhongExplorer(FigureExplorer):
         return (hex_to_rgb(self.colour.value), 1.0, self.ka.value, 1.0, self.kd.value,
                 self.ks.value, self.n.value, self.L, self.V)
 
+    @one_at_a_time
     def update(self):
         """Re-render both spheres in place, refresh the markers and the readout, redraw."""
         with self.readout.hold_sync():  # the figure's frame goes first, the readout after it

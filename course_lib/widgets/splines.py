@@ -29,7 +29,7 @@ import numpy as np
 
 from .. import splines
 from ..plots.splines import EXAMPLE_POINTS, draw_curve, spline_scene, update_curve
-from ._view import FigureExplorer
+from ._view import FigureExplorer, one_at_a_time
 from ..plotting import new_figure
 
 __all__ = ["SplineEndExplorer", "combination_tex", "formulas_html", "spline_end_explorer"]
@@ -180,6 +180,7 @@ class SplineEndExplorer(FigureExplorer):
         return spline_scene(self.points, self.kind.value, self.rule.value,
                             phantoms=self.phantoms, n_per_segment=self.n_per_segment)
 
+    @one_at_a_time
     def update(self):
         """Recompute the curve and move the artists in place; refresh the formulas."""
         self.scene = self._scene()

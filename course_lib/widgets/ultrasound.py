@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import ultrasound as us
 from ..plots import ultrasound as uplots
-from ._view import FigureView
+from ._view import FigureView, one_at_a_time
 
 
 class BScanExplorer:
@@ -143,6 +143,7 @@ class BScanExplorer:
                               + f"\nliver / fat as displayed: {h['liver'] / h['fat']:.3f}")
 
     # ---------------------------------------------------------------------------------------
+    @one_at_a_time
     def update(self):
         """Re-simulate with the current controls and change the artists in place."""
         phantom, (image, x, depth, extent, env) = self._simulate()

@@ -229,6 +229,57 @@ def test_updates_faster_than_frames_are_shown_by_one_later_frame():
     plt.close(ex.fig)
 
 
+def test_a_figure_saved_while_the_explorer_redraws_is_whole():
+    """JupyterLab 4 + ipykernel 7 run widget callbacks in a subshell thread while a cell may
+    save the explorer's figure in the main thread. Both use the canvas' one Agg renderer, and
+    savefig encodes the PNG from its buffer with the GIL released: unguarded, a redraw in the
+    other thread cleared it half-way (25 of 40 saves came out blank or torn). Oracle: a save taken
+    while nothing else runs. Below the axes everything is static (tick and axis labels), so
+    every save must match it there, and the exam model's open holes must be drawn."""
+    import io
+    import threading
+
+    from PIL import Image
+
+    from course_lib.plots.gamma_camera import OPEN
+    from matplotlib.colors import to_rgb
+
+    ex = CollimatorExplorer()
+    assert ex.widget is not None
+    painter = ex._view.blitter
+
+    def save():
+        buffer = io.BytesIO()
+        ex.fig.savefig(buffer, format="png", dpi=ex.fig.dpi)
+        return np.asarray(Image.open(buffer).convert("RGB"), dtype=np.int16)
+
+    reference = save()
+    below_axes = int(round(reference.shape[0] - ex.ax_exam.bbox.y0)) + 2
+    green = np.round(255 * np.array(to_rgb(OPEN))).astype(np.int16)
+    stop, failed = threading.Event(), []
+
+    def drive():
+        for k in range(10_000):
+            if stop.is_set():
+                return
+            painter.background = None                      # each frame draws the background
+            ex.z.value = 500.0 + 10.0 * (k % 50)           # z >= 500 mm: ring 1 stays open
+
+    thread = threading.Thread(target=lambda: _record(drive, failed))
+    thread.start()
+    try:
+        saves = [save() for _ in range(12)]
+    finally:
+        stop.set()
+        thread.join(30)
+    assert not failed, failed
+    for k, picture in enumerate(saves):
+        strip = np.abs(picture[below_axes:] - reference[below_axes:]).max(axis=-1)
+        assert (strip <= 2).mean() > 0.999, f"save {k}: the static labels differ (torn/blank)"
+        assert (np.abs(picture - green).max(axis=-1) <= 2).sum() > 50, f"save {k}: no open hole"
+    plt.close(ex.fig)
+
+
 def test_a_blitted_figure_asks_pyplot_for_no_redraw():
     """IPython runs pyplot's post_execute hook after every widget message; it redraws every
     stale figure with draw_idle, which under ipympl means a full redraw asked by the browser.
