@@ -62,6 +62,17 @@ def _css(rgba, alpha=None) -> str | None:
     return f"rgba({r},{g},{b},{a:.4g})"
 
 
+def _css_list(colours, alpha=None) -> list:
+    """:func:`_css` of every row of an ``(n, 4)`` RGBA array (a collection's colours), each
+    distinct colour formatted once."""
+    rgba = np.asarray(colours, dtype=float).reshape(-1, 4)
+    if len(rgba) <= 2:
+        return [_css(c, alpha) for c in rgba]
+    unique, inverse = np.unique(rgba, axis=0, return_inverse=True)
+    names = [_css(c, alpha) for c in unique]
+    return [names[i] for i in inverse.ravel()]
+
+
 def _geometry(path) -> tuple[np.ndarray, np.ndarray]:
     """A path's vertices (float32) and codes (uint8), codes filled in for a plain polyline."""
     v = np.asarray(path.vertices, dtype=np.float32).reshape(-1, 2)
@@ -73,6 +84,26 @@ def _geometry(path) -> tuple[np.ndarray, np.ndarray]:
         c = np.asarray(path.codes, dtype=np.uint8)
     keep = c != Path.STOP
     return v[keep], c[keep]
+
+
+def _joined_geometry(paths) -> tuple[np.ndarray, np.ndarray, list]:
+    """Every path's vertices (float64) and codes (uint8) one after the other, as
+    :func:`_geometry` gives them path by path, and each path's number of vertices."""
+    verts = [np.asarray(p.vertices, dtype=np.float64).reshape(-1, 2) for p in paths]
+    codes = []
+    for p, v in zip(paths, verts):
+        if p.codes is None:
+            c = np.full(len(v), Path.LINETO, dtype=np.uint8)
+            c[:1] = Path.MOVETO
+        else:
+            c = np.asarray(p.codes, dtype=np.uint8)
+        codes.append(c)
+    v, c = np.concatenate(verts), np.concatenate(codes)
+    keep = c != Path.STOP
+    if keep.all():
+        return v, c, [len(x) for x in verts]
+    owner = np.repeat(np.arange(len(verts)), [len(x) for x in verts])
+    return v[keep], c[keep], np.bincount(owner[keep], minlength=len(verts)).tolist()
 
 
 class SceneRenderer(RendererBase):
@@ -338,8 +369,7 @@ class SceneRenderer(RendererBase):
             if len(offsets):
                 xo, yo = offset_trans.transform(offsets[0])
                 transform = master_transform + Affine2D().translate(xo, yo)
-            geometry = [_geometry(p) for p in paths]
-            v = np.concatenate([g[0] for g in geometry]).astype(np.float64)
+            v, c, counts = _joined_geometry(paths)
             v = np.asarray(transform.transform(v), dtype=np.float32)
         if v is None or not np.isfinite(v).all():
             super().draw_path_collection(gc, master_transform, paths, all_transforms, offsets,
@@ -350,12 +380,11 @@ class SceneRenderer(RendererBase):
         lw = float(self.points_to_pixels(linewidths[0] if len(linewidths) else
                                          gc.get_linewidth()))
         forced = gc.get_alpha() if gc.get_forced_alpha() else None
-        fills = [_css(c, forced) for c in facecolors]
-        strokes = [_css(c, forced) for c in edgecolors] if lw > 0 else []
+        fills = _css_list(facecolors, forced)
+        strokes = _css_list(edgecolors, forced) if lw > 0 else []
         if not any(fills) and not any(strokes):
             return
-        self.items.append({"k": "paths", "v": v, "c": np.concatenate([g[1] for g in geometry]),
-                           "n": [len(g[0]) for g in geometry], "fills": fills,
+        self.items.append({"k": "paths", "v": v, "c": c, "n": counts, "fills": fills,
                            "strokes": strokes, "lw": lw,
                            "aa": None if not len(antialiaseds) or any(antialiaseds) else False,
                            "cap": _CAPS.get(gc.get_capstyle(), "butt"),

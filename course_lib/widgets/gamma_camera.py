@@ -106,8 +106,9 @@ class CollimatorExplorer(FigureExplorer):
         Per hole: the exam's 0/1 verdict and the exact share of its mouth's photons that pass.
     results : dict
         ``n_holes``, ``n_open``, ``face_radius``, ``cutoff_exam``, ``cutoff_exact``,
-        ``exam_fraction``, ``exact_fraction`` (uniform), ``isotropic_fraction`` and
-        ``resolution`` after the last update.
+        ``exam_fraction``, ``exact_fraction`` (uniform), ``isotropic_fraction``,
+        ``hole_equivalents`` (the exact shares summed over the holes) and ``resolution``
+        after the last update.
     """
 
     def __init__(self, d=1.0, L=40.0, z=1000.0, pitch=10.0, n_rings=4):
@@ -211,6 +212,8 @@ class CollimatorExplorer(FigureExplorer):
         ax.set_xlabel("lateral position")
         ax.set_ylabel("distance from the collimator face")
         ax.set_title("Q2(c): one hole, side view (not to scale)", fontsize=9)
+        for face_ax in (self.ax_exam, self.ax_exact):
+            face_ax.title.set_fontsize(9)
         # The side view keeps its data in mm and fits them to fixed axes through one scaling
         # (set by _update_side): its limits never change, so a slider move keeps the background.
         self._side_fit = Affine2D()
@@ -264,6 +267,7 @@ class CollimatorExplorer(FigureExplorer):
             "isotropic_fraction": gc.exact_open_fraction(self.holes, d, L, z, Rf, "isotropic"),
             "resolution": gc.collimator_resolution(d, L, z),
             "overlap": bool(n >= 1 and d >= 2.0 * pitch * np.sin(np.pi / 8.0)),
+            "hole_equivalents": float(self.exact_share.sum()),
         }
         self.results = res
 
@@ -278,7 +282,8 @@ class CollimatorExplorer(FigureExplorer):
         for key, ax, values in (("exam", self.ax_exam, self.exam_open),
                                 ("exact", self.ax_exact, self.exact_share)):
             a = self.art[key]
-            a["face"].set_radius(Rf)
+            if a["face"].get_radius() != Rf:        # unchanged: kept from the last frame
+                a["face"].set_radius(Rf)
             if circles is not None:
                 # PatchCollection.set_paths takes patches and stores their paths (no new artist)
                 a["holes"].set_paths(circles)
@@ -289,10 +294,11 @@ class CollimatorExplorer(FigureExplorer):
             ax.set_ylim(-lim, lim)
         scale = radius / (d / 2.0)
         size = f" (holes drawn ×{scale:.2g})" if scale > 1.0001 else ""
-        self.ax_exam.set_title(f"Q2(d) exam model: {res['n_open']} of {res['n_holes']} holes "
-                               f"open{size}", fontsize=9)
-        self.ax_exact.set_title(f"exact: {self.exact_share.sum():.2f} hole-equivalents pass"
-                                f"{size}", fontsize=9)
+        # set_text marks a title changed only when its text is new: an unchanged title is
+        # not laid out and sent again (the exact numbers are in the readout)
+        self.ax_exam.title.set_text(f"Q2(d) exam model: {res['n_open']} of {res['n_holes']} "
+                                    f"holes open{size}")
+        self.ax_exact.title.set_text(f"exact lens-overlap model{size}")
         self._update_side(d, L, z, res["resolution"])
         self.readout.value = self._readout_html(d, L, z, res)
 
@@ -344,7 +350,8 @@ class CollimatorExplorer(FigureExplorer):
             f"<b>exam model</b> (Q2(d)): {res['n_open']} of {res['n_holes']} holes open, "
             f"open fraction {100 * res['exam_fraction']:.4g} %<br>"
             f"<b>exact transmission</b>: {100 * res['exact_fraction']:.4g} % "
-            f"(uniform over the face, as the exam assumes); "
+            f"(uniform over the face, as the exam assumes: "
+            f"{res['hole_equivalents']:.2f} hole-equivalents pass); "
             f"{100 * res['isotropic_fraction']:.4g} % (isotropic point source); "
             f"exam / exact = {ratio:.3g}<br>"
             f"<b>resolution</b> (Q2(c)) at z = {z:g} mm: R = d (L + z) / L = "

@@ -2,10 +2,11 @@
 
 Built from explicit ipywidgets controls with ``.observe`` callbacks (no ``interact``): the
 figure is drawn once and :meth:`BScanExplorer.update` changes its artists in place
-(``AxesImage.set_data``, ``Line2D.set_data``, ``Text.set_text``), under any matplotlib backend.
-The browser paints the figure (:mod:`course_lib.widgets._view`, issue 15): axes, ticks and
-labels stay cached, and only the image (at its own resolution, scaled by the page), the
-outlines, the A-lines and the title are sent again.
+(``AxesImage.set_data``, ``Line2D.set_data``), under any matplotlib backend. The browser paints
+the figure (:mod:`course_lib.widgets._view`, issue 15): axes, ticks and labels stay cached, and
+only the image (at its own resolution, scaled by the page), the outlines and the A-lines are
+sent again; the displayed block heights are a text readout under the figure, sent after it
+(text that changes in the figure would be laid out and outlined in the kernel on every move).
 """
 
 from __future__ import annotations
@@ -25,7 +26,9 @@ class BScanExplorer:
     Controls: the true sound speed of fat, liver and water, the height of each block, the probe
     frequency and time-gain compensation. The left panel is the simulated image with the true
     outlines (dashed) and the displayed outlines (dotted); the right panel shows the A-lines
-    through a gap and through the liver; the title reports the displayed block heights.
+    through a gap and through the liver (before time-gain compensation: the echoes as they
+    return); the readout under the figure (``readout``, HTML)
+    gives the true and displayed block heights and the displayed liver / fat ratio.
 
     Parameters
     ----------
@@ -79,11 +82,11 @@ class BScanExplorer:
         self.ax_line.set_xlim(0, self.DEPTH_MAX)
         self.ax_line.set_ylim(-100, 0)
         self.ax_line.set_xlabel("displayed depth (mm)")
-        self.ax_line.set_ylabel("echo level (dB)")
+        self.ax_line.set_ylabel("echo level before TGC (dB)")
         self.ax_line.grid(True, alpha=0.3)
         self.ax_line.legend(fontsize=7, loc="upper right")
-        self.summary = self.ax_line.set_title("", fontsize=8)
-        self._write_summary()
+        self.readout = widgets.HTML()
+        self._write_readout()
 
         for w in self.controls:
             w.observe(self._on_change, names="value")
@@ -91,7 +94,7 @@ class BScanExplorer:
         right = widgets.VBox(self.controls[3:6] + [self.tgc])
         self._view = FigureView()                  # painted by the browser (issue 15)
         view = self._view.widget(self.fig)
-        self.widget = widgets.VBox([widgets.HBox([left, right]), view])
+        self.widget = widgets.VBox([widgets.HBox([left, right]), view, self.readout])
         self._view.redraw(self.fig)                # the first frame
 
     # ---------------------------------------------------------------------------------------
@@ -135,17 +138,27 @@ class BScanExplorer:
                 "liver": us.displayed_thickness(self.t_liver.value, sp["liver"]),
                 "water": us.displayed_thickness(self.t_water.value, sp["water"])}
 
-    def _write_summary(self):
+    def _write_readout(self):
+        """The readout: each block's true and displayed height, and the displayed liver / fat
+        ratio (Q1(c))."""
         h = self.displayed_heights()
         true = {"fat": self.t_fat.value, "liver": self.t_liver.value, "water": self.t_water.value}
         parts = [f"{k} {true[k]:.0f} -> {h[k]:.1f} mm" for k in ("fat", "liver", "water")]
-        self.summary.set_text("block heights, true -> displayed:\n" + ", ".join(parts)
-                              + f"\nliver / fat as displayed: {h['liver'] / h['fat']:.3f}")
+        self.readout.value = (
+            "<div style='font-family: monospace; font-size: 12px; line-height: 1.5'>"
+            f"block heights, true -> displayed: {', '.join(parts)}<br>"
+            f"liver / fat as displayed: {h['liver'] / h['fat']:.3f}</div>")
 
     # ---------------------------------------------------------------------------------------
     @one_at_a_time
     def update(self):
-        """Re-simulate with the current controls and change the artists in place."""
+        """Re-simulate with the current controls, change the artists in place, redraw, then
+        refresh the readout (sent after the figure's frame)."""
+        with self.readout.hold_sync():
+            self._update_figure()
+            self._write_readout()
+
+    def _update_figure(self):
         phantom, (image, x, depth, extent, env) = self._simulate()
         self.im.set_data(image)
         self.im.set_extent(extent)
@@ -156,7 +169,6 @@ class BScanExplorer:
             line.set_data(xs, zs)
         for line, xc in zip(self.a_lines, (self._gap_x(phantom), self._liver_x(phantom))):
             line.set_data(depth, self._aline(env, x, xc))
-        self._write_summary()
         self._view.redraw(self.fig)
 
     def _on_change(self, change):

@@ -472,3 +472,37 @@ def test_aline_figure_plots_the_envelope_in_db():
         assert len(art["markers"]) == 4  # three interfaces under the liver + the true floor
     finally:
         plt.close(fig)
+
+
+def test_symmetric_blur_is_numpys_same_size_convolution():
+    """Q1(c) pulse and beam blur: oracle ``numpy.convolve``'s full convolution, row by row and
+    column by column, cropped to the samples the centred kernel lands on (its
+    ``mode="same"`` when the kernel is the shorter), for kernels shorter and longer than the
+    signal."""
+    from course_lib.ultrasound import _symmetric_blur
+
+    rng = np.random.default_rng(5)
+    a = (rng.standard_normal((6, 40)) + 1j * rng.standard_normal((6, 40))).astype(np.complex64)
+    for taps in (1, 5, 17, 81):
+        w = np.exp(-0.5 * np.linspace(-3, 3, taps) ** 2)
+        half = taps // 2
+        rows = np.array([np.convolve(r, w)[half:half + len(r)] for r in a])
+        cols = np.array([np.convolve(c, w)[half:half + len(c)] for c in a.T]).T
+        np.testing.assert_allclose(_symmetric_blur(a, w, axis=1), rows, rtol=1e-5, atol=1e-5)
+        np.testing.assert_allclose(_symmetric_blur(a, w, axis=0), cols, rtol=1e-5, atol=1e-5)
+        assert _symmetric_blur(a, w, axis=1).dtype == np.complex64
+
+
+def test_speckle_draws_are_the_seeds_draws_kept_read_only():
+    """Oracle: ``default_rng(seed)``'s uniform then normal draws. An integer seed's draws are
+    kept (read-only, so no caller can spoil the next image); ``None`` draws afresh."""
+    from course_lib.ultrasound import _speckle_draws
+
+    uniform, amp = _speckle_draws(7, 3, 11)
+    rng = np.random.default_rng(7)
+    np.testing.assert_array_equal(uniform, rng.random((3, 11)))
+    np.testing.assert_array_equal(amp, rng.standard_normal((3, 11)))
+    assert _speckle_draws(np.int64(7), 3, 11)[0] is uniform
+    with pytest.raises(ValueError):
+        uniform[0, 0] = 1.0
+    assert not np.array_equal(_speckle_draws(None, 3, 11)[1], _speckle_draws(None, 3, 11)[1])

@@ -423,3 +423,37 @@ def test_unpack_rejects_a_damaged_scene(fig, ax, cut):
                "truncated": whole[:-100]}[cut]
     with pytest.raises(ValueError, match="message"):
         unpack(message)
+
+
+def test_a_collections_colours_are_each_rows_css_colour():
+    """``_css_list`` formats each distinct colour once; the oracle is ``_css`` row by row
+    (repeats, transparent rows and a forced alpha included)."""
+    from course_lib.widgets._scene import _css, _css_list
+
+    rng = np.random.default_rng(3)
+    rows = rng.random((40, 4))
+    rows[::5] = rows[1]                      # repeats
+    rows[7, 3] = 0.0                         # invisible: None
+    for alpha in (None, 0.5):
+        assert _css_list(rows, alpha) == [_css(r, alpha) for r in rows]
+    assert _css_list(rows[:2]) == [_css(r) for r in rows[:2]]
+    assert _css_list(np.zeros((0, 4))) == []
+
+
+def test_joined_geometry_is_each_paths_geometry_one_after_the_other():
+    """Oracle: ``_geometry`` path by path (a polyline without codes, a closed path, a path
+    ending in STOP codes, an empty path)."""
+    from matplotlib.path import Path
+
+    from course_lib.widgets._scene import _geometry, _joined_geometry
+
+    paths = [Path([[0, 0], [1, 2], [3, 1]]),
+             Path.unit_circle(),
+             Path([[0, 0], [1, 0], [1, 1], [0, 0]],
+                  [Path.MOVETO, Path.LINETO, Path.LINETO, Path.STOP]),
+             Path(np.zeros((0, 2)))]
+    v, c, counts = _joined_geometry(paths)
+    singles = [_geometry(p) for p in paths]
+    assert counts == [len(g[0]) for g in singles]
+    np.testing.assert_allclose(v, np.concatenate([g[0] for g in singles]), atol=1e-6)
+    np.testing.assert_array_equal(c, np.concatenate([g[1] for g in singles]))

@@ -55,7 +55,7 @@ def test_block_height_moves_true_and_displayed_outlines(ex):
     assert _outline_height(ex.true_lines[0]) == pytest.approx(25.0)
     c_fat = ex.c_fat.value
     assert _outline_height(ex.shown_lines[0]) == pytest.approx(25.0 * 1540.0 / c_fat, rel=1e-9)
-    assert "fat 25 -> " in ex.summary.get_text()
+    assert "fat 25 -> " in ex.readout.value
 
 
 def test_water_speed_moves_every_displayed_top_face(ex):
@@ -99,7 +99,7 @@ def test_tgc_brightens_deep_tissue(ex):
     assert after[deep].mean() > before[deep].mean()
 
 
-def test_summary_reports_the_exam_ratio(ex):
+def test_readout_reports_the_exam_ratio(ex):
     # default speeds: liver / fat = 1450 / 1578 for equal true heights
-    text = ex.summary.get_text()
+    text = ex.readout.value
     assert f"{1450.0 / 1578.0:.3f}" in text
