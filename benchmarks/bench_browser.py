@@ -59,10 +59,36 @@ EXPLORERS = (
     ("marching_cubes", "case_explorer", "iso-level", "ArrowRight"),
 )
 
+# In the page, once: count the drawing calls made on each canvas. A canvas' pixels can change
+# only through its context's drawing calls or a resize, so the probe below reads the pixels
+# back (getImageData, 2.5 MB for the widest figure) only on animation frames after one: read
+# on every frame, the probe itself took ~40 % of a core from the two the kernel, the server
+# and the browser share, and slowed every explorer (before and now alike) by 10-30 ms.
+_WATCH_JS = """
+() => {
+  if (window.__benchDrawn) return;
+  const drawn = window.__benchDrawn = new WeakMap();
+  const bump = (canvas) => { if (canvas) drawn.set(canvas, (drawn.get(canvas) || 0) + 1); };
+  const proto = CanvasRenderingContext2D.prototype;
+  for (const name of ['clearRect', 'fillRect', 'strokeRect', 'fill', 'stroke', 'drawImage',
+                      'putImageData', 'fillText', 'strokeText', 'reset']) {
+    const original = proto[name];
+    if (typeof original !== 'function') continue;
+    proto[name] = function (...args) { bump(this.canvas); return original.apply(this, args); };
+  }
+  for (const name of ['width', 'height']) {
+    const d = Object.getOwnPropertyDescriptor(HTMLCanvasElement.prototype, name);
+    Object.defineProperty(HTMLCanvasElement.prototype, name, {
+      ...d, set(value) { bump(this); d.set.call(this, value); } });
+  }
+}
+"""
+
 # In the page: one press measured from its keydown to the first changed canvas frame.
 _MEASURE_JS = """
 async ([canvas, settleMs, timeoutMs]) => {
   const ctx = canvas.getContext('2d');
+  const drawnOn = () => window.__benchDrawn.get(canvas) || 0;
   const grab = () => new Uint32Array(
       ctx.getImageData(0, 0, canvas.width, canvas.height).data.buffer);
   const differs = (a, b) => {
@@ -70,6 +96,7 @@ async ([canvas, settleMs, timeoutMs]) => {
     for (let i = 0; i < a.length; i++) if (a[i] !== b[i]) return true;
     return false;
   };
+  let seen = drawnOn();
   let last = grab();
   let t0 = null;
   const onKey = (e) => { if (t0 === null) t0 = performance.now(); };
@@ -82,10 +109,13 @@ async ([canvas, settleMs, timeoutMs]) => {
     await frame();
     if (t0 === null) continue;
     const now = performance.now();
-    const pixels = grab();
-    if (differs(pixels, last)) {
-      frames += 1; lastChange = now; last = pixels;
-      if (first === null) first = now;
+    if (drawnOn() !== seen) {              // drawn on since the last look: compare the pixels
+      seen = drawnOn();
+      const pixels = grab();
+      if (differs(pixels, last)) {
+        frames += 1; lastChange = now; last = pixels;
+        if (first === null) first = now;
+      }
     }
     if (first !== null && now - lastChange > settleMs) break;
   }
@@ -205,6 +235,7 @@ def measure_presses(page, description: str, key: str, presses: int) -> dict:
     time.sleep(2.0)                                   # the first frames, fonts, caches
     page.evaluate("src => { window.__benchMeasure = (0, eval)('(' + src + ')'); }",
                   _MEASURE_JS.strip())
+    page.evaluate(_WATCH_JS.strip())
     handle = _slider_handle(page, description)
     handle.focus()
     latencies, frames, missed = [], [], 0
