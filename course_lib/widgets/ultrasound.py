@@ -27,8 +27,8 @@ class BScanExplorer:
     frequency and time-gain compensation. The left panel is the simulated image with the true
     outlines (dashed) and the displayed outlines (dotted); the right panel shows the A-lines
     through a gap and through the liver (before time-gain compensation: the echoes as they
-    return); the readout under the figure (``readout``, HTML)
-    gives the true and displayed block heights and the displayed liver / fat ratio.
+    return); the readout under the figure (``readout``, HTML) gives the true and displayed
+    block heights and the displayed liver / fat ratio.
 
     Parameters
     ----------
