@@ -5,7 +5,10 @@ What a student feels when dragging a control (issue 15). For each explorer a scr
 localhost; Debian's Chromium, driven by Playwright, focuses one slider's handle and presses an
 arrow key ``PRESSES`` times. Inside the page a capture-phase ``keydown`` listener notes the
 event's time and a ``requestAnimationFrame`` loop compares the figure canvas' pixels with the
-frame shown before the press: the latency is the time to the first frame that differs. After
+frame shown before the press: the latency is the time to the first frame that differs. The
+loop reads the pixels back only on frames after a drawing call on that canvas (counted by
+wrapping the 2-D context's drawing methods, ``_WATCH_JS``): reading 2.5 MB on every frame made
+the probe itself a load on the two cores. After
 that the loop watches until the canvas has been still for ``SETTLE_MS``, counting the frames
 that changed (one per press: no intermediate or flickering frame), before the next press.
 

@@ -26,6 +26,11 @@ encoded it as a PNG, sent it, and the page decoded it. Of the approaches weighed
   in display pixels) and sends that scene (16-250 kB) to the page, which paints background and
   scene in one task: one frame per update, nothing half drawn.
 
+Widget callbacks may run in another thread than the cells (a kernel subshell, JupyterLab 4 with
+ipykernel 7): an explorer's updates, redraws and any draw or save of its figure hold one lock
+per figure (:func:`figure_lock`), or a redraw could clear the Agg buffer a ``savefig`` is
+encoding.
+
 :class:`Blitter` remains the base of :class:`ScenePainter` (the split into background and
 changing artists, the frozen layout, frame dropping) and, through :func:`use_blitting`, redraws
 a figure's own Agg canvas headless: ``tests/widgets/test_view.py`` checks on it that the split
