@@ -62,8 +62,8 @@ from matplotlib.layout_engine import PlaceHolderLayoutEngine
 
 from ._scene import SceneRenderer, pack
 
-__all__ = ["Blitter", "ExplorerCanvas", "FigureExplorer", "FigureView", "ScenePainter",
-           "figure_lock", "one_at_a_time", "use_blitting"]
+__all__ = ["Blitter", "ExplorerCanvas", "FigureExplorer", "FigureView", "KeptPictures",
+           "ScenePainter", "figure_lock", "one_at_a_time", "use_blitting"]
 
 
 # -- one thread at a time on a figure --------------------------------------------------------------
@@ -266,7 +266,7 @@ class Blitter:
         for a in artists:
             if not a.get_visible():
                 continue
-            if sprites is not None and not a.stale and _cacheable(a):
+            if sprites is not None and KeptPictures.unchanged(a):
                 sprites.paint(a, renderer)
             else:
                 if sprites is not None:  # changed: its old pixels are no longer its own
@@ -299,7 +299,7 @@ class ScenePainter(Blitter):
         self._base_dpi = float(fig.dpi)
         self._ratio = 1.0                  # the page's pixels per CSS pixel, as last reported
         self._renderer = None
-        self._kept: dict[int, tuple] = {}
+        self._kept = KeptPictures()          # each unchanged artist's recorded items
         canvas_widget.on_msg(self._on_msg)
 
     def _draw_all(self):
@@ -323,19 +323,15 @@ class ScenePainter(Blitter):
         for a in artists:
             if not a.get_visible():
                 continue
-            kept = self._kept.get(id(a))
-            data = _data_of(a)
-            if (kept is not None and kept[0] is a and kept[2] is data and not a.stale
-                    and _cacheable(a)):
-                items.extend(kept[1])
-                continue
-            scene.items = []
-            if isinstance(a, AxesImage):
-                scene.draw_axes_image(a)  # at its own resolution: the browser scales it
-            else:
-                a.draw(scene)
-            self._kept[id(a)] = (a, scene.items, data)
-            items.extend(scene.items)
+            kept = self._kept.get(a)
+            if kept is KeptPictures.NONE:
+                scene.items = kept = []
+                if isinstance(a, AxesImage):
+                    scene.draw_axes_image(a)  # at its own resolution: the browser scales it
+                else:
+                    a.draw(scene)
+                self._kept.put(a, kept)
+            items.extend(kept)
         width, height = (int(round(v)) for v in self.fig.bbox.size)
         self.widget.show(scene=pack(items, scene.clips, scene.height), size=(width, height),
                          background=self.background if new_background else None)
@@ -436,22 +432,55 @@ def _project_3d(ax, children) -> None:
         zorder[kind] += 1
 
 
-def _data_of(artist):
-    """The data array of a colour-mapped artist (a collection's ``set_array``), else ``None``.
+class KeptPictures:
+    """What was drawn of each artist (a sprite, recorded scene items), kept for as long as the
+    artist does not change, by :class:`SpriteCache` and :class:`ScenePainter`.
 
-    ``set_array`` does not mark an artist stale, so a kept picture of it (a sprite, recorded
-    scene items) is valid only while the artist still holds the very same array object: the
-    kept entry holds that array, so a new one can never reuse its ``id``."""
-    get_array = getattr(artist, "get_array", None)
-    return get_array() if callable(get_array) and not isinstance(artist, AxesImage) else None
+    A picture is out of date once its artist is stale (matplotlib sets ``stale`` on every
+    ``set_*``) or, for a colour-mapped collection, holds another data array: ``set_array``
+    does not mark it stale, so the entry keeps the array it was drawn with (a new array can
+    then never reuse its ``id``). Axes and legends that place themselves (``loc="best"``) are
+    never kept: where they land depends on everything else.
+    """
 
+    NONE = object()                  # what :meth:`get` answers when nothing valid is kept
 
-def _cacheable(artist) -> bool:
-    """Whether an unchanged artist may be painted from a sprite: not an axes, nor a legend
-    that places itself ("best") where the data leave room."""
-    if isinstance(artist, Axes):
-        return False
-    return not (isinstance(artist, Legend) and artist._loc in (0, "best"))
+    def __init__(self):
+        self._entries: dict[int, tuple] = {}
+
+    @staticmethod
+    def data_of(artist):
+        """The data array of a colour-mapped artist (a collection's ``set_array``), else
+        ``None``."""
+        get_array = getattr(artist, "get_array", None)
+        return get_array() if callable(get_array) and not isinstance(artist, AxesImage) else None
+
+    @staticmethod
+    def unchanged(artist) -> bool:
+        """Whether ``artist`` may be shown from a kept picture at all: not stale, not an axes,
+        nor a legend that places itself."""
+        if artist.stale or isinstance(artist, Axes):
+            return False
+        return not (isinstance(artist, Legend) and artist._loc in (0, "best"))
+
+    def get(self, artist):
+        """``artist``'s kept picture if still valid, else :attr:`NONE`."""
+        entry = self._entries.get(id(artist))
+        if (entry is None or entry[0] is not artist or entry[2] is not self.data_of(artist)
+                or not self.unchanged(artist)):
+            return self.NONE
+        return entry[1]
+
+    def put(self, artist, picture):
+        """Keep ``picture`` as what ``artist`` looks like now; returns it."""
+        self._entries[id(artist)] = (artist, picture, self.data_of(artist))
+        return picture
+
+    def forget(self, artist) -> None:
+        self._entries.pop(id(artist), None)
+
+    def clear(self) -> None:
+        self._entries.clear()
 
 
 class SpriteCache:
@@ -471,7 +500,7 @@ class SpriteCache:
     def __init__(self, renderer):
         self.width, self.height, self.dpi = renderer.width, renderer.height, renderer.dpi
         self._scratch = None
-        self._sprites: dict[int, tuple] = {}
+        self._sprites = KeptPictures()
 
     def _render(self, artist):
         if self._scratch is None:
@@ -489,16 +518,14 @@ class SpriteCache:
 
     def forget(self, artist) -> None:
         """Drop ``artist``'s sprite (it has changed)."""
-        self._sprites.pop(id(artist), None)
+        self._sprites.forget(artist)
 
     def paint(self, artist, renderer) -> None:
-        """Composite ``artist``'s sprite (made now if missing) onto ``renderer``."""
-        key = id(artist)
-        entry = self._sprites.get(key)
-        data = _data_of(artist)
-        if entry is None or entry[0] is not artist or entry[2] is not data:
-            entry = self._sprites[key] = (artist, self._render(artist), data)
-        sprite = entry[1]
+        """Composite ``artist``'s sprite (made now if missing or out of date) onto
+        ``renderer``."""
+        sprite = self._sprites.get(artist)
+        if sprite is KeptPictures.NONE:
+            sprite = self._sprites.put(artist, self._render(artist))
         if sprite is not None:
             x, y, image = sprite
             gc = renderer.new_gc()
