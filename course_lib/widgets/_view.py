@@ -221,6 +221,7 @@ class Blitter:
         fig, canvas = self.fig, self.fig.canvas
         self._freeze_layout()
         dynamic = [a for a in self.dynamic_artists() if a.get_visible()]
+        stale = [a.stale for a in dynamic]
         for a in dynamic:
             a.set_visible(False)
         self._own_draw = True
@@ -228,8 +229,9 @@ class Blitter:
             FigureCanvasAgg.draw(canvas)  # no frame sent yet: only the background
         finally:
             self._own_draw = False
-            for a in dynamic:
+            for a, was_stale in zip(dynamic, stale):
                 a.set_visible(True)
+                a.stale = was_stale   # hidden and shown again, it has not changed
         renderer = canvas.get_renderer()
         for ax in fig.axes:  # a hidden title is placed as if it were not there: place it again
             if hasattr(ax, "_update_title_position"):
@@ -303,14 +305,19 @@ class ScenePainter(Blitter):
         canvas_widget.on_msg(self._on_msg)
 
     def _draw_all(self):
+        before = self._signature
         dynamic = self._draw_background()
         renderer = self.fig.canvas.get_renderer()
         with io.BytesIO() as png:  # the background, as the page will show it
             Image.fromarray(np.asarray(renderer.buffer_rgba())).save(
                 png, format="png", compress_level=1)
             self.background = png.getvalue()
-        self._renderer = SceneRenderer(renderer)
-        self._kept.clear()
+        moved = _axes_with_a_new_view(before, self._signature, self.fig)
+        if moved is None or self._renderer is None or self._renderer._metrics is not renderer:
+            self._renderer = SceneRenderer(renderer)
+            self._kept.clear()
+        else:  # same size and layout: what other axes hold is where it was (a pitch slider)
+            self._kept.keep_only(lambda artist: getattr(artist, "axes", None) not in moved)
         self._paint(dynamic, new_background=True)
 
     def _blit(self):
@@ -399,6 +406,23 @@ def _plain_agg_canvas(fig) -> None:
             old.close()
 
 
+def _axes_with_a_new_view(before, after, fig) -> set | None:
+    """Between two :meth:`Blitter.signature` of ``fig``: the axes whose view (limits, scales,
+    3-D angles) changed, when nothing else did; ``None`` when the figure's size, dpi, number
+    of axes or any axes' position changed (then every artist may have moved)."""
+    if before is None or before[:2] != after[:2] or len(before[2]) != len(after[2]):
+        return None
+    if len(after[2]) != len(fig.axes):
+        return None
+    moved = set()
+    for ax, old, new in zip(fig.axes, before[2], after[2]):
+        if old[0] != new[0]:
+            return None
+        if old != new:
+            moved.add(ax)
+    return moved
+
+
 def _running_loop():
     """The running asyncio event loop (the kernel's, in a notebook), or ``None``."""
     try:
@@ -478,6 +502,10 @@ class KeptPictures:
 
     def forget(self, artist) -> None:
         self._entries.pop(id(artist), None)
+
+    def keep_only(self, wanted) -> None:
+        """Forget every picture whose artist ``wanted(artist)`` rejects."""
+        self._entries = {k: e for k, e in self._entries.items() if wanted(e[0])}
 
     def clear(self) -> None:
         self._entries.clear()
