@@ -538,20 +538,24 @@ def _speckle_draws(seed, nx: int, n_sc: int) -> tuple[np.ndarray, np.ndarray]:
     """The speckle's random numbers for :func:`simulate_bscan`: per scan line, ``n_sc``
     uniform draws (the scatterers' places within their slots) and ``n_sc`` standard normal
     amplitudes, in that order from ``numpy.random.default_rng(seed)``. An integer seed's draws
-    are kept (read-only) for the next call: an explorer re-simulates the same speckle on every
-    slider move."""
+    are kept for the next call (an explorer re-simulates the same speckle on every slider
+    move), as bytes: the arrays handed out are read-only views that cannot be made writable."""
     if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
         return _kept_speckle_draws(int(seed), nx, n_sc)
     rng = np.random.default_rng(seed)
     return rng.random((nx, n_sc)), rng.standard_normal((nx, n_sc))
 
 
-@functools.lru_cache(maxsize=4)
 def _kept_speckle_draws(seed: int, nx: int, n_sc: int):
+    uniform, amp = _kept_draw_bytes(seed, nx, n_sc)
+    return (np.frombuffer(uniform).reshape(nx, n_sc),   # views of immutable bytes: read-only
+            np.frombuffer(amp).reshape(nx, n_sc))       # for good, whoever holds them
+
+
+@functools.lru_cache(maxsize=4)
+def _kept_draw_bytes(seed: int, nx: int, n_sc: int) -> tuple[bytes, bytes]:
     rng = np.random.default_rng(seed)
-    uniform, amp = rng.random((nx, n_sc)), rng.standard_normal((nx, n_sc))
-    uniform.flags.writeable = amp.flags.writeable = False
-    return uniform, amp
+    return rng.random((nx, n_sc)).tobytes(), rng.standard_normal((nx, n_sc)).tobytes()
 
 
 def _symmetric_blur(a: np.ndarray, weights: np.ndarray, axis: int) -> np.ndarray:

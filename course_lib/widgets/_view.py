@@ -47,6 +47,7 @@ import math
 import sys
 import threading
 import time
+import weakref
 
 import ipywidgets as W
 import numpy as np
@@ -77,16 +78,17 @@ __all__ = ["Blitter", "ExplorerCanvas", "FigureExplorer", "FigureView", "KeptPic
 # So an explorer's update, its redraws and any draw or save of its figure hold one lock.
 
 _LOCKS_LOCK = threading.Lock()
+_FIGURE_LOCKS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
 def figure_lock(fig) -> threading.RLock:
     """The lock that an explorer's updates and every draw or save of ``fig`` hold (re-entrant:
-    an update may redraw). Kept on the figure, since savefig to another format swaps its
-    canvas for a while."""
-    lock = fig.__dict__.get("_explorer_lock")
-    if lock is None:
-        with _LOCKS_LOCK:
-            lock = fig.__dict__.setdefault("_explorer_lock", threading.RLock())
+    an update may redraw). Kept per figure, not per canvas (savefig to another format swaps
+    the canvas for a while), and beside the figure, not in it (a figure still pickles)."""
+    with _LOCKS_LOCK:
+        lock = _FIGURE_LOCKS.get(fig)
+        if lock is None:
+            lock = _FIGURE_LOCKS[fig] = threading.RLock()
     return lock
 
 

@@ -27,10 +27,12 @@ Every change calls :meth:`CollimatorExplorer.update`, which replaces the paths a
 of the existing hole collections (``set_paths``, ``set_array``), moves the circles, rectangles
 and lines (``set_radius``, ``set_bounds``, ``set_data``) and redraws; no artist is created.
 The browser paints what changed over the cached axes (:mod:`course_lib.widgets._view`,
-issue 15). So that a move of ``d``, ``L`` or ``z`` never changes an axes' limits (which would mean
-redrawing the whole figure, ticks and all), the side view keeps its data in mm and fits them
-into fixed axes with one scaling (``side_limits`` holds the mm shown); it has no ticks, its
-labels give the sizes.
+issue 15). A change of an axes' limits means drawing its ticks again with Agg (a new
+background, the one costly kind of update), so: a move of ``d``, ``L`` or ``z`` never changes
+them (the side view keeps its data in mm and fits them into fixed axes with one scaling,
+``side_limits`` holding the mm shown; it has no ticks, its labels give the sizes), and a move
+of the pitch or the rings changes the face views' limits only when the face crosses one of
+the sizes in :data:`FACE_LIMITS`.
 
 In a notebook (any matplotlib backend)::
 
@@ -55,8 +57,8 @@ from ..plotting import COLOURS
 from ..plots.gamma_camera import OPEN, SEPTUM, SHUT
 from ._view import FigureExplorer, one_at_a_time
 
-__all__ = ["CollimatorExplorer", "EXAM_SETTINGS", "collimator_explorer", "face_radius",
-           "hole_draw_radius"]
+__all__ = ["CollimatorExplorer", "EXAM_SETTINGS", "collimator_explorer", "face_limit",
+           "face_radius", "hole_draw_radius"]
 
 #: The notebook's givens for Q2(d) (our reconstruction of the question, see the notebook).
 EXAM_SETTINGS = {"d": 1.0, "L": 40.0, "z": 1000.0, "pitch": 10.0, "n_rings": 4}
@@ -65,6 +67,20 @@ EXAM_SETTINGS = {"d": 1.0, "L": 40.0, "z": 1000.0, "pitch": 10.0, "n_rings": 4}
 def face_radius(pitch: float, n_rings: int) -> float:
     """Radius of the collimator face: one pitch beyond the last ring (Q2(d): 5 x 10 = 50 mm)."""
     return (int(n_rings) + 1) * float(pitch)
+
+
+#: The half-widths (mm) the face views step through, so that most pitch or ring changes keep
+#: their limits (and ticks) as they were.
+FACE_LIMITS = (3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0, 40.0, 50.0, 60.0,
+               80.0, 100.0, 120.0, 150.0, 200.0, 250.0)
+
+
+def face_limit(extent: float) -> float:
+    """The half-width of the face views for a drawing reaching ``extent`` mm from the axis
+    (the face, or a hole drawn beyond it): the first of :data:`FACE_LIMITS` that leaves a 4 %
+    margin (Q2(d)'s 50 mm face: 60 mm)."""
+    need = 1.04 * float(extent)
+    return next((lim for lim in FACE_LIMITS if lim >= need), need)
 
 
 def hole_draw_radius(d: float, pitch: float, n_rings: int) -> float:
@@ -272,7 +288,7 @@ class CollimatorExplorer(FigureExplorer):
         self.results = res
 
         radius = hole_draw_radius(d, pitch, n)
-        lim = 1.08 * Rf
+        lim = face_limit(max(Rf, float(r.max()) + radius))
         # the holes' outlines change with d, the pitch and the rings only (not with L or z)
         outline = (pitch, n, radius)
         circles = None

@@ -502,7 +502,9 @@ def test_speckle_draws_are_the_seeds_draws_kept_read_only():
     rng = np.random.default_rng(7)
     np.testing.assert_array_equal(uniform, rng.random((3, 11)))
     np.testing.assert_array_equal(amp, rng.standard_normal((3, 11)))
-    assert _speckle_draws(np.int64(7), 3, 11)[0] is uniform
+    np.testing.assert_array_equal(_speckle_draws(np.int64(7), 3, 11)[0], uniform)
     with pytest.raises(ValueError):
         uniform[0, 0] = 1.0
+    with pytest.raises(ValueError):                      # nor made writable again
+        uniform.flags.writeable = True
     assert not np.array_equal(_speckle_draws(None, 3, 11)[1], _speckle_draws(None, 3, 11)[1])

@@ -174,3 +174,25 @@ def test_factory():
         assert ex.d.value == 2.0 and ex.results["n_holes"] == 25
     finally:
         plt.close(ex.fig)
+
+
+def test_face_views_step_through_fixed_sizes_that_hold_the_whole_face():
+    """Every pitch and ring count the sliders allow: the face views' half-width is one of
+    ``FACE_LIMITS``, holds the face and every drawn hole with a margin, and at most 1.35 times
+    what is needed; a half-pitch step keeps the limits in most cases (no new background)."""
+    from course_lib.widgets.gamma_camera import (FACE_LIMITS, face_limit, face_radius,
+                                                 hole_draw_radius)
+    from course_lib.gamma_camera import ring_hole_positions
+
+    kept = changed = 0
+    for n in range(0, 9):
+        previous = None
+        for pitch in np.arange(2.0, 20.01, 0.5):
+            r = np.hypot(*ring_hole_positions(pitch, n).T)
+            reach = max(face_radius(pitch, n), r.max() + hole_draw_radius(5.0, pitch, n))
+            lim = face_limit(reach)
+            assert lim in FACE_LIMITS and 1.04 * reach <= lim <= 1.35 * 1.04 * reach
+            if previous is not None:
+                kept, changed = kept + (lim == previous), changed + (lim != previous)
+            previous = lim
+    assert kept > 2 * changed
