@@ -301,11 +301,17 @@ def my_variant(notebook: str, typed: str = "", *, quiet: bool = False,
                missing_ok: bool = False):
     """The working student's numbers for ``notebook`` (see :func:`student_id`), printed unless
     ``quiet``. With ``missing_ok``, an unknown student gives a stand-in whose every use says to
-    type the id first, instead of a ``ValueError`` now (the setup cell runs before the id cell)."""
+    type the id first, instead of a ``ValueError`` now (the setup cell runs before the id cell;
+    the id cell itself, so that Run All goes on through an untouched notebook: the cells that
+    need the numbers then say what to do), and says so unless ``quiet``."""
     try:
         sid = student_id(typed)
     except ValueError as exc:
         if missing_ok:
+            if not quiet:
+                why = str(exc)
+                print(f"{why[:1].upper()}{why[1:]}.\nUntil then, every cell that uses your "
+                      "numbers says so; the others run.")
             return _NoStudentYet(notebook, str(exc))
         raise
     typed_id = _clean_id(typed or "", "STUDENT_ID")

@@ -41,6 +41,7 @@ what the browser's picture relies on.
 from __future__ import annotations
 
 import asyncio
+import collections
 import functools
 import io
 import math
@@ -63,7 +64,7 @@ from matplotlib.layout_engine import PlaceHolderLayoutEngine
 
 from ._scene import SceneRenderer, pack
 
-__all__ = ["Blitter", "ExplorerCanvas", "FigureExplorer", "FigureView", "KeptPictures",
+__all__ = ["Blitter", "ExplorerCanvas", "FairLock", "FigureExplorer", "FigureView", "KeptPictures",
            "ScenePainter", "figure_lock", "one_at_a_time", "use_blitting"]
 
 
@@ -77,18 +78,62 @@ __all__ = ["Blitter", "ExplorerCanvas", "FigureExplorer", "FigureView", "KeptPic
 # tests/widgets/test_view.py::test_a_figure_saved_while_the_explorer_redraws_is_whole).
 # So an explorer's update, its redraws and any draw or save of its figure hold one lock.
 
+class FairLock:
+    """A re-entrant lock that threads get in the order they asked for it.
+
+    ``threading.RLock`` is not fair: a cell saving the figure in a loop took it back at once
+    after each save, and the explorer (a waiting subshell thread) answered no slider until
+    the loop ended (seen in a playtest). Here a thread that releases the lock and asks again
+    queues behind those already waiting."""
+
+    def __init__(self):
+        self._cond = threading.Condition(threading.Lock())
+        self._owner = None
+        self._depth = 0
+        self._queue: collections.deque = collections.deque()
+
+    def acquire(self) -> bool:
+        me = threading.get_ident()
+        with self._cond:
+            if self._owner == me:
+                self._depth += 1
+                return True
+            self._queue.append(me)
+            while self._owner is not None or self._queue[0] != me:
+                self._cond.wait()
+            self._queue.popleft()
+            self._owner, self._depth = me, 1
+            return True
+
+    def release(self) -> None:
+        with self._cond:
+            if self._owner != threading.get_ident():
+                raise RuntimeError("release of a FairLock this thread does not hold")
+            self._depth -= 1
+            if self._depth == 0:
+                self._owner = None
+                self._cond.notify_all()
+
+    def __enter__(self):
+        return self.acquire()
+
+    def __exit__(self, *exc):
+        self.release()
+
+
 _LOCKS_LOCK = threading.Lock()
-_FIGURE_LOCKS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+_FIGURE_LOCKS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def figure_lock(fig) -> threading.RLock:
+def figure_lock(fig) -> FairLock:
     """The lock that an explorer's updates and every draw or save of ``fig`` hold (re-entrant:
-    an update may redraw). Kept per figure, not per canvas (savefig to another format swaps
-    the canvas for a while), and beside the figure, not in it (a figure still pickles)."""
+    an update may redraw; fair: a save loop lets the explorer in between saves). Kept per
+    figure, not per canvas (savefig to another format swaps the canvas for a while), and
+    beside the figure, not in it (a figure still pickles)."""
     with _LOCKS_LOCK:
         lock = _FIGURE_LOCKS.get(fig)
         if lock is None:
-            lock = _FIGURE_LOCKS[fig] = threading.RLock()
+            lock = _FIGURE_LOCKS[fig] = FairLock()
     return lock
 
 

@@ -128,8 +128,8 @@ class CollimatorExplorer(FigureExplorer):
     """
 
     def __init__(self, d=1.0, L=40.0, z=1000.0, pitch=10.0, n_rings=4):
-        slider = {"continuous_update": True, "style": {"description_width": "150px"},
-                  "layout": W.Layout(width="400px")}
+        slider = {"continuous_update": True, "style": {"description_width": "175px"},
+                  "layout": W.Layout(width="425px")}
         self.d = W.FloatSlider(d, min=0.2, max=5.0, step=0.1, description="hole diameter d (mm)",
                                readout_format=".1f", **slider)
         self.L = W.FloatSlider(L, min=5.0, max=250.0, step=1.0,
@@ -351,27 +351,28 @@ class CollimatorExplorer(FigureExplorer):
         self._side_fit.translate(-1.0, 0.0)
 
     def _readout_html(self, d, L, z, res) -> str:
+        head = ("<div style='font-family: monospace; font-size: 12px; line-height: 1.5'>"
+                f"face radius {res['face_radius']:g} mm, {res['n_holes']} holes; "
+                f"cut-off d z / L = {res['cutoff_exam']:.4g} mm "
+                f"(exact: + d/2 = {res['cutoff_exact']:.4g} mm)<br>")
+        resolution = (f"<b>resolution</b> (Q2(c)) at z = {z:g} mm: R = d (L + z) / L = "
+                      f"{res['resolution']:.4g} mm")
+        if res["overlap"]:  # the models' fractions would pass 100 %: not shown
+            return (head + resolution + "<br><span style='color:#d62728'>the holes are wider "
+                    "than their spacing and overlap: no septa are left between them, so "
+                    "neither model applies (no open fraction or transmission is shown)"
+                    "</span></div>")
         ratio = (res["exam_fraction"] / res["exact_fraction"]
                  if res["exact_fraction"] > 0 else float("inf"))
-        warn = ""
-        if res["overlap"]:
-            warn = ("<br><span style='color:#d62728'>the holes are wider than their spacing "
-                    "and overlap: no septa are left between them, so neither model "
-                    "applies</span>")
         return (
-            "<div style='font-family: monospace; font-size: 12px; line-height: 1.5'>"
-            f"face radius {res['face_radius']:g} mm, {res['n_holes']} holes; "
-            f"cut-off d z / L = {res['cutoff_exam']:.4g} mm "
-            f"(exact: + d/2 = {res['cutoff_exact']:.4g} mm)<br>"
-            f"<b>exam model</b> (Q2(d)): {res['n_open']} of {res['n_holes']} holes open, "
+            head
+            + f"<b>exam model</b> (Q2(d)): {res['n_open']} of {res['n_holes']} holes open, "
             f"open fraction {100 * res['exam_fraction']:.4g} %<br>"
             f"<b>exact transmission</b>: {100 * res['exact_fraction']:.4g} % "
             f"(uniform over the face, as the exam assumes: "
             f"{res['hole_equivalents']:.2f} hole-equivalents pass); "
             f"{100 * res['isotropic_fraction']:.4g} % (isotropic point source); "
-            f"exam / exact = {ratio:.3g}<br>"
-            f"<b>resolution</b> (Q2(c)) at z = {z:g} mm: R = d (L + z) / L = "
-            f"{res['resolution']:.4g} mm{warn}</div>"
+            f"exam / exact = {ratio:.3g}<br>" + resolution + "</div>"
         )
 
     # ---------------------------------------------------------------------------------------

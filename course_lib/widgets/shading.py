@@ -107,8 +107,8 @@ class PhongExplorer(FigureExplorer):
     def __init__(self, size: int = 128, probe=None):
         self.size = int(size)
         self.probe = shading.normalize(shading.EXAM_Q5B["N"] if probe is None else probe)
-        slider = {"continuous_update": True, "style": {"description_width": "110px"},
-                  "layout": W.Layout(width="330px")}
+        slider = {"continuous_update": True, "style": {"description_width": "130px"},
+                  "layout": W.Layout(width="350px")}
         self.ka = W.FloatSlider(0.2, min=0.0, max=1.0, step=0.01, description="ka (ambient)",
                                 **slider)
         self.kd = W.FloatSlider(0.6, min=0.0, max=1.0, step=0.01, description="kd (diffuse)",
@@ -118,7 +118,7 @@ class PhongExplorer(FigureExplorer):
         self.n = W.FloatLogSlider(20.0, base=10, min=0, max=3, step=0.01,
                                   description="n (exponent)", **slider)
         self.colour = W.ColorPicker(value="#3366ff", description="colour c",
-                                    style={"description_width": "110px"})
+                                    style={"description_width": "130px"})
         self.light_azimuth = W.FloatSlider(-45.0, min=-180, max=180, step=0.5,
                                            description="light azimuth°", **slider)
         self.light_elevation = W.FloatSlider(35.0, min=-90, max=90, step=0.5,

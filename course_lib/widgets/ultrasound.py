@@ -42,8 +42,8 @@ class BScanExplorer:
 
     def __init__(self, nx: int = 128, seed: int = 0):
         self.nx, self.seed = nx, seed
-        style = {"description_width": "120px"}
-        layout = widgets.Layout(width="340px")
+        style = {"description_width": "140px"}
+        layout = widgets.Layout(width="360px")
 
         def slider(desc, value, lo, hi, step, fmt=".0f"):
             return widgets.FloatSlider(value=value, min=lo, max=hi, step=step, description=desc,

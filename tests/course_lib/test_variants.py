@@ -75,6 +75,15 @@ def test_my_variant_prints_whose_numbers(no_id, capsys):
     assert "Your numbers (student ab123)" in capsys.readouterr().out
 
 
+def test_an_untyped_id_cell_says_what_to_do_and_lets_run_all_go_on(no_id, capsys):
+    """The notebooks' id cell (``missing_ok``): no exception (Run All goes on), a message."""
+    mine = my_variant("q5_phong", "", missing_ok=True)
+    out = capsys.readouterr().out
+    assert out.startswith("No student id") and "STUDENT_ID" in out and "Until then" in out
+    with pytest.raises(ValueError, match="STUDENT_ID"):
+        _ = mine.N
+
+
 def test_before_the_id_is_typed_every_use_says_what_to_do(no_id):
     mine = my_variant("q5_phong", quiet=True, missing_ok=True)
     with pytest.raises(ValueError, match="STUDENT_ID"):

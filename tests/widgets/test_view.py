@@ -370,3 +370,33 @@ def test_an_explorer_figure_still_pickles():
     assert [a.get_title() for a in copy.axes] == [a.get_title() for a in ex.fig.axes]
     plt.close(ex.fig)
     plt.close(copy)
+
+
+def test_the_figure_lock_is_fair_and_re_entrant():
+    """A thread that releases the lock and asks again queues behind a waiting one (a cell
+    saving in a loop must let the explorer in between saves), and the owner may take it again
+    (an update redraws). Oracle: the order in which the two threads got the lock."""
+    import threading
+    import time
+
+    lock = _view.FairLock()
+    order, waiting = [], threading.Event()
+
+    def other():
+        waiting.set()
+        with lock:
+            order.append("other")
+
+    with lock:
+        with lock:                                         # re-entrant
+            thread = threading.Thread(target=other)
+            thread.start()
+            waiting.wait(5)
+            time.sleep(0.2)                                # it is queued now
+        order.append("first")
+    with lock:                                             # asks again at once: second in line
+        order.append("again")
+    thread.join(5)
+    assert order == ["first", "other", "again"]
+    with pytest.raises(RuntimeError):
+        lock.release()                                     # not held by this thread
