@@ -54,8 +54,9 @@ PRESS_TIMEOUT_MS = 5000
 
 #: ``(module, factory, slider description, keys)``: the control each explorer is driven by, and
 #: the arrow key(s) pressed in turn (two keys go back and forth, for a short slider). The
-#: collimator's pitch is a second row: it changes the face views' axis limits, so each press
-#: draws a new background (the one kind of update that still does).
+#: collimator's pitch is a second row: its face views step through fixed sizes, so a press
+#: between 10 and 10.5 mm keeps their limits and the background (one that crosses a size
+#: draws a new background, the one costly kind of update left).
 EXPLORERS = (
     ("shading", "phong_explorer", "light azimuth°", "ArrowRight"),
     ("splines", "spline_end_explorer", "x", "ArrowRight"),
