@@ -26,10 +26,10 @@ encoded it as a PNG, sent it, and the page decoded it. Of the approaches weighed
   in display pixels) and sends that scene (16-250 kB) to the page, which paints background and
   scene in one task: one frame per update, nothing half drawn.
 
-Widget callbacks may run in another thread than the cells (a kernel subshell, JupyterLab 4 with
-ipykernel 7): an explorer's updates, redraws and any draw or save of its figure hold one lock
-per figure (:func:`figure_lock`), or a redraw could clear the Agg buffer a ``savefig`` is
-encoding.
+Widget callbacks may run in another thread than the cells and the kernel's event loop (a kernel
+subshell, JupyterLab 4 with ipykernel 7): an explorer's updates, redraws and any draw or save
+of its figure hold one lock per figure (:func:`figure_lock`), or a redraw could clear the Agg
+buffer a ``savefig`` is encoding.
 
 :class:`Blitter` remains the base of :class:`ScenePainter` (the split into background and
 changing artists, the frozen layout, frame dropping) and, through :func:`use_blitting`, redraws
@@ -70,8 +70,9 @@ __all__ = ["Blitter", "ExplorerCanvas", "FairLock", "FigureExplorer", "FigureVie
 
 # -- one thread at a time on a figure --------------------------------------------------------------
 # In JupyterLab 4 with ipykernel 7 the widgets' messages (a slider moved, a button clicked, the
-# canvas' mouse) are handled in a kernel *subshell* thread, while the cells run in the main
-# thread: an explorer may update and redraw its figure while a cell saves it. Both draw with
+# canvas' mouse) are handled in a kernel *subshell* thread, while the main thread runs the
+# cells and the kernel's event loop (a redraw put off during a drag, Blitter.redraw): two
+# threads may update, redraw or save one explorer's figure at the same time. Both draw with
 # the canvas' one Agg renderer, and savefig encodes the PNG straight from that renderer's buffer
 # (with the GIL released): a redraw at that moment cleared it, and the file came out blank or
 # drawn only in its top rows (seen in the browser tests under load; reproduced by
@@ -81,10 +82,10 @@ __all__ = ["Blitter", "ExplorerCanvas", "FairLock", "FigureExplorer", "FigureVie
 class FairLock:
     """A re-entrant lock that threads get in the order they asked for it.
 
-    ``threading.RLock`` is not fair: a cell saving the figure in a loop took it back at once
-    after each save, and the explorer (a waiting subshell thread) answered no slider until
-    the loop ended (seen in a playtest). Here a thread that releases the lock and asks again
-    queues behind those already waiting."""
+    ``threading.RLock`` is not fair: a thread drawing or saving the figure in a loop takes it
+    back at once after each round, and another thread's update may wait for the whole loop.
+    Here a thread that releases the lock and asks again queues behind those already
+    waiting."""
 
     def __init__(self):
         self._cond = threading.Condition(threading.Lock())

@@ -232,8 +232,9 @@ def test_updates_faster_than_frames_are_shown_by_one_later_frame():
 
 
 def test_a_figure_saved_while_the_explorer_redraws_is_whole():
-    """JupyterLab 4 + ipykernel 7 run widget callbacks in a subshell thread while a cell may
-    save the explorer's figure in the main thread. Both use the canvas' one Agg renderer, and
+    """JupyterLab 4 + ipykernel 7 run widget callbacks in a subshell thread while the main
+    thread may redraw (a deferred frame) or save the explorer's figure. Both use the canvas'
+    one Agg renderer, and
     savefig encodes the PNG from its buffer with the GIL released: unguarded, a redraw in the
     other thread cleared it half-way (25 of 40 saves came out blank or torn). Oracle: a save taken
     while nothing else runs. Below the axes everything is static (tick and axis labels), so
@@ -373,9 +374,9 @@ def test_an_explorer_figure_still_pickles():
 
 
 def test_the_figure_lock_is_fair_and_re_entrant():
-    """A thread that releases the lock and asks again queues behind a waiting one (a cell
-    saving in a loop must let the explorer in between saves), and the owner may take it again
-    (an update redraws). Oracle: the order in which the two threads got the lock."""
+    """A thread that releases the lock and asks again queues behind a waiting one (a loop of
+    saves or redraws must let another thread's update in between), and the owner may take it
+    again (an update redraws). Oracle: the order in which the two threads got the lock."""
     import threading
     import time
 
