@@ -59,7 +59,9 @@ OUTSIDE_NEAR_MEAN, OUTSIDE_NEAR_40, TEXT_MARGIN = 2.0, 0.99, 3  # measured 99.4-
 #: ``(module, factory, slider description, key, presses)``
 FIDELITY = {
     "phong": ("shading", "phong_explorer", "light azimuth°", "ArrowRight", 20),
-    "bscan": ("ultrasound", "bscan_explorer", "fat speed (m/s)", "ArrowRight", 15),
+    # the heights (a readout since issue 15's second round) no longer change in the figure:
+    # the fat speed moved its block's outline by a few pixels only; a height moves it a lot
+    "bscan": ("ultrasound", "bscan_explorer", "fat height (mm)", "ArrowLeft", 15),
     "collimator": ("gamma_camera", "collimator_explorer", "source distance z (mm)",
                    "ArrowLeft", 15),
 }
