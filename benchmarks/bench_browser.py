@@ -232,6 +232,11 @@ def _slider_handle(page, description: str):
     return slider.locator(".noUi-handle, [role='slider']").first
 
 
+def _keys(key) -> tuple:
+    """The keys of an ``EXPLORERS`` entry, pressed in turn: one key, or a tuple of them."""
+    return key if isinstance(key, tuple) else (key,)
+
+
 def measure_presses(page, description: str, key, presses: int) -> dict:
     """Press ``key`` (or, for a tuple, its keys in turn) on the slider ``description``
     ``presses`` times, one after the other.
@@ -247,7 +252,7 @@ def measure_presses(page, description: str, key, presses: int) -> dict:
     page.evaluate(_WATCH_JS.strip())
     handle = _slider_handle(page, description)
     handle.focus()
-    keys = key if isinstance(key, tuple) else (key,)
+    keys = _keys(key)
     latencies, frames, missed = [], [], 0
     for press in range(presses):
         canvas.evaluate("(el, a) => { window.__benchResult = window.__benchMeasure([el, ...a]); }",
@@ -303,7 +308,7 @@ def _missed(summary: dict) -> str:
 
 def _row(spec, ours, before, ref) -> Row:
     module, _, description, key = spec
-    keys = key if isinstance(key, tuple) else (key,)
+    keys = _keys(key)
     case = f"{module}: {description}"
     if ours is None:
         return Row(SECTION, case, "key press to pixels, p90", float("nan"),

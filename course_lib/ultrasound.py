@@ -541,15 +541,10 @@ def _speckle_draws(seed, nx: int, n_sc: int) -> tuple[np.ndarray, np.ndarray]:
     are kept for the next call (an explorer re-simulates the same speckle on every slider
     move), as bytes: the arrays handed out are read-only views that cannot be made writable."""
     if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
-        return _kept_speckle_draws(int(seed), nx, n_sc)
+        kept = _kept_draw_bytes(int(seed), nx, n_sc)    # views of immutable bytes: read-only
+        return tuple(np.frombuffer(b).reshape(nx, n_sc) for b in kept)  # for good
     rng = np.random.default_rng(seed)
     return rng.random((nx, n_sc)), rng.standard_normal((nx, n_sc))
-
-
-def _kept_speckle_draws(seed: int, nx: int, n_sc: int):
-    uniform, amp = _kept_draw_bytes(seed, nx, n_sc)
-    return (np.frombuffer(uniform).reshape(nx, n_sc),   # views of immutable bytes: read-only
-            np.frombuffer(amp).reshape(nx, n_sc))       # for good, whoever holds them
 
 
 @functools.lru_cache(maxsize=4)

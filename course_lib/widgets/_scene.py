@@ -73,15 +73,19 @@ def _css_list(colours, alpha=None) -> list:
     return [names[i] for i in inverse.ravel()]
 
 
+def _codes(path, n: int) -> np.ndarray:
+    """A path's ``n`` codes (uint8), filled in (MOVETO, then LINETO) for a plain polyline."""
+    if path.codes is not None:
+        return np.asarray(path.codes, dtype=np.uint8)
+    c = np.full(n, Path.LINETO, dtype=np.uint8)
+    c[:1] = Path.MOVETO
+    return c
+
+
 def _geometry(path) -> tuple[np.ndarray, np.ndarray]:
-    """A path's vertices (float32) and codes (uint8), codes filled in for a plain polyline."""
+    """A path's vertices (float32) and codes (uint8), STOP codes left out."""
     v = np.asarray(path.vertices, dtype=np.float32).reshape(-1, 2)
-    if path.codes is None:
-        c = np.full(len(v), Path.LINETO, dtype=np.uint8)
-        if len(c):
-            c[0] = Path.MOVETO
-    else:
-        c = np.asarray(path.codes, dtype=np.uint8)
+    c = _codes(path, len(v))
     keep = c != Path.STOP
     return v[keep], c[keep]
 
@@ -90,15 +94,8 @@ def _joined_geometry(paths) -> tuple[np.ndarray, np.ndarray, list]:
     """Every path's vertices (float64) and codes (uint8) one after the other, as
     :func:`_geometry` gives them path by path, and each path's number of vertices."""
     verts = [np.asarray(p.vertices, dtype=np.float64).reshape(-1, 2) for p in paths]
-    codes = []
-    for p, v in zip(paths, verts):
-        if p.codes is None:
-            c = np.full(len(v), Path.LINETO, dtype=np.uint8)
-            c[:1] = Path.MOVETO
-        else:
-            c = np.asarray(p.codes, dtype=np.uint8)
-        codes.append(c)
-    v, c = np.concatenate(verts), np.concatenate(codes)
+    v = np.concatenate(verts)
+    c = np.concatenate([_codes(p, len(x)) for p, x in zip(paths, verts)])
     keep = c != Path.STOP
     if keep.all():
         return v, c, [len(x) for x in verts]

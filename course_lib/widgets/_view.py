@@ -65,7 +65,7 @@ from matplotlib.layout_engine import PlaceHolderLayoutEngine
 from ._scene import SceneRenderer, pack
 
 __all__ = ["Blitter", "ExplorerCanvas", "FairLock", "FigureExplorer", "FigureView", "KeptPictures",
-           "ScenePainter", "figure_lock", "one_at_a_time", "use_blitting"]
+           "ScenePainter", "figure_lock", "one_at_a_time", "readout_html", "use_blitting"]
 
 
 # -- one thread at a time on a figure --------------------------------------------------------------
@@ -460,8 +460,6 @@ def _axes_with_a_new_view(before, after, fig) -> set | None:
     of axes or any axes' position changed (then every artist may have moved)."""
     if before is None or before[:2] != after[:2] or len(before[2]) != len(after[2]):
         return None
-    if len(after[2]) != len(fig.axes):
-        return None
     moved = set()
     for ax, old, new in zip(fig.axes, before[2], after[2]):
         if old[0] != new[0]:
@@ -676,6 +674,13 @@ class FigureExplorer:
         from IPython.display import display
 
         display(self.widget)
+
+
+def readout_html(*lines: str) -> str:
+    """An explorer's text readout (an ``ipywidgets.HTML`` value): ``lines`` in a monospace
+    block, one per line."""
+    return ("<div style='font-family: monospace; font-size: 12px; line-height: 1.5'>"
+            + "<br>".join(lines) + "</div>")
 
 
 def set_view(explorer, view):

@@ -55,7 +55,7 @@ from matplotlib.transforms import Affine2D
 from .. import gamma_camera as gc
 from ..plotting import COLOURS
 from ..plots.gamma_camera import OPEN, SEPTUM, SHUT
-from ._view import FigureExplorer, one_at_a_time
+from ._view import FigureExplorer, one_at_a_time, readout_html
 
 __all__ = ["CollimatorExplorer", "EXAM_SETTINGS", "collimator_explorer", "face_limit",
            "face_radius", "hole_draw_radius"]
@@ -351,29 +351,28 @@ class CollimatorExplorer(FigureExplorer):
         self._side_fit.translate(-1.0, 0.0)
 
     def _readout_html(self, d, L, z, res) -> str:
-        head = ("<div style='font-family: monospace; font-size: 12px; line-height: 1.5'>"
-                f"face radius {res['face_radius']:g} mm, {res['n_holes']} holes; "
+        head = (f"face radius {res['face_radius']:g} mm, {res['n_holes']} holes; "
                 f"cut-off d z / L = {res['cutoff_exam']:.4g} mm "
-                f"(exact: + d/2 = {res['cutoff_exact']:.4g} mm)<br>")
+                f"(exact: + d/2 = {res['cutoff_exact']:.4g} mm)")
         resolution = (f"<b>resolution</b> (Q2(c)) at z = {z:g} mm: R = d (L + z) / L = "
                       f"{res['resolution']:.4g} mm")
         if res["overlap"]:  # the models' fractions would pass 100 %: not shown
-            return (head + resolution + "<br><span style='color:#d62728'>the holes are wider "
-                    "than their spacing and overlap: no septa are left between them, so "
-                    "neither model applies (no open fraction or transmission is shown)"
-                    "</span></div>")
+            return readout_html(
+                head, resolution, "<span style='color:#d62728'>the holes are wider than their "
+                "spacing and overlap: no septa are left between them, so neither model applies "
+                "(no open fraction or transmission is shown)</span>")
         ratio = (res["exam_fraction"] / res["exact_fraction"]
                  if res["exact_fraction"] > 0 else float("inf"))
-        return (
-            head
-            + f"<b>exam model</b> (Q2(d)): {res['n_open']} of {res['n_holes']} holes open, "
-            f"open fraction {100 * res['exam_fraction']:.4g} %<br>"
+        return readout_html(
+            head,
+            f"<b>exam model</b> (Q2(d)): {res['n_open']} of {res['n_holes']} holes open, "
+            f"open fraction {100 * res['exam_fraction']:.4g} %",
             f"<b>exact transmission</b>: {100 * res['exact_fraction']:.4g} % "
             f"(uniform over the face, as the exam assumes: "
             f"{res['hole_equivalents']:.2f} hole-equivalents pass); "
             f"{100 * res['isotropic_fraction']:.4g} % (isotropic point source); "
-            f"exam / exact = {ratio:.3g}<br>" + resolution + "</div>"
-        )
+            f"exam / exact = {ratio:.3g}",
+            resolution)
 
     # ---------------------------------------------------------------------------------------
     # controls

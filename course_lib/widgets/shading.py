@@ -33,7 +33,7 @@ import numpy as np
 
 from .. import shading
 from ..plots.shading import sphere_pair, update_sphere_pair
-from ._view import FigureExplorer, one_at_a_time
+from ._view import FigureExplorer, one_at_a_time, readout_html
 from ..plotting import new_figure
 
 __all__ = ["PhongExplorer", "angles", "direction", "hex_to_rgb", "phong_explorer", "rgb_to_hex"]
@@ -225,14 +225,12 @@ class PhongExplorer(FigureExplorer):
             H = vec(shading.halfway(L, V))
         except ValueError:
             H = "undefined (V = −L)"
-        return (
-            "<div style='font-family: monospace; font-size: 12px; line-height: 1.5'>"
-            f"L = {vec(L)}<br>V = {vec(V)}"
-            f"{' (the exam&#39;s exact directions)' if self._exam_mode else ''}<br>H = {H}<br>"
-            f"probe N = {vec(self.probe)} (yellow square)<br>"
-            f"<b>Phong</b> I = {rgb(self.probe_values['phong'])}<br>"
-            f"<b>Blinn-Phong</b> I = {rgb(self.probe_values['blinn'])}</div>"
-        )
+        return readout_html(
+            f"L = {vec(L)}", f"V = {vec(V)}"
+            f"{' (the exam&#39;s exact directions)' if self._exam_mode else ''}", f"H = {H}",
+            f"probe N = {vec(self.probe)} (yellow square)",
+            f"<b>Phong</b> I = {rgb(self.probe_values['phong'])}",
+            f"<b>Blinn-Phong</b> I = {rgb(self.probe_values['blinn'])}")
 
     def load_exam(self, *_):
         """Set the controls to the Q5(b) example (one update at the end).

@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import ultrasound as us
 from ..plots import ultrasound as uplots
-from ._view import FigureView, one_at_a_time
+from ._view import FigureView, one_at_a_time, readout_html
 
 
 class BScanExplorer:
@@ -144,10 +144,9 @@ class BScanExplorer:
         h = self.displayed_heights()
         true = {"fat": self.t_fat.value, "liver": self.t_liver.value, "water": self.t_water.value}
         parts = [f"{k} {true[k]:.0f} -> {h[k]:.1f} mm" for k in ("fat", "liver", "water")]
-        self.readout.value = (
-            "<div style='font-family: monospace; font-size: 12px; line-height: 1.5'>"
-            f"block heights, true -> displayed: {', '.join(parts)}<br>"
-            f"liver / fat as displayed: {h['liver'] / h['fat']:.3f}</div>")
+        self.readout.value = readout_html(
+            f"block heights, true -> displayed: {', '.join(parts)}",
+            f"liver / fat as displayed: {h['liver'] / h['fat']:.3f}")
 
     # ---------------------------------------------------------------------------------------
     @one_at_a_time
