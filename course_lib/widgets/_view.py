@@ -65,7 +65,8 @@ from matplotlib.layout_engine import PlaceHolderLayoutEngine
 from ._scene import SceneRenderer, pack
 
 __all__ = ["Blitter", "ExplorerCanvas", "FairLock", "FigureExplorer", "FigureView", "KeptPictures",
-           "ScenePainter", "figure_lock", "one_at_a_time", "readout_html", "use_blitting"]
+           "ScenePainter", "figure_lock", "one_at_a_time", "one_message_at_a_time", "readout_html",
+           "use_blitting"]
 
 
 # -- one thread at a time on a figure --------------------------------------------------------------
@@ -78,6 +79,14 @@ __all__ = ["Blitter", "ExplorerCanvas", "FairLock", "FigureExplorer", "FigureVie
 # drawn only in its top rows (seen in the browser tests under load; reproduced by
 # tests/widgets/test_view.py::test_a_figure_saved_while_the_explorer_redraws_is_whole).
 # So an explorer's update, its redraws and any draw or save of its figure hold one lock.
+#
+# Nor do one explorer's widgets share a thread: ipykernel (7.4) hands a comm's messages to the
+# thread that last sent a message on that comm. A slider or the canvas, once updated from the
+# subshell, are handled there; a button that has only ever been drawn by its cell, on the main
+# thread (measured in JupyterLab: a "save figure" click ran while the subshell was still
+# working through a drag's mouse moves). So every message to an explorer's widgets is handled
+# holding the figure's lock too (:func:`one_message_at_a_time`): the explorer's callbacks,
+# its guards (``_syncing``, ``_holding``) and its state see one message at a time.
 
 class FairLock:
     """A re-entrant lock that threads get in the order they asked for it.
@@ -148,6 +157,33 @@ def one_at_a_time(update):
             return update(self, *args, **kwargs)
 
     return locked
+
+
+def one_message_at_a_time(layout, fig):
+    """Handle every message from the page to ``layout`` and the widgets inside it holding
+    :func:`figure_lock` of ``fig`` (see the note above :class:`FairLock`); returns ``layout``.
+
+    Each widget's comm gets a handler that takes the lock, then does what ipywidgets does
+    (``Widget._handle_msg``: set the state the page sent, fire the observers, run the
+    callbacks of a click or of a custom message)."""
+    lock = figure_lock(fig)
+    todo, seen = [layout], set()
+    while todo:
+        widget = todo.pop()
+        if id(widget) in seen:
+            continue
+        seen.add(id(widget))
+        todo.extend(getattr(widget, "children", ()))
+        comm = getattr(widget, "comm", None)
+        if comm is None:
+            continue
+
+        def locked(msg, handle=widget._handle_msg):
+            with lock:
+                handle(msg)
+
+        comm.on_msg(locked)
+    return layout
 
 
 class ExplorerCanvas(FigureCanvasAgg):
@@ -666,7 +702,8 @@ class FigureExplorer:
     def widget(self):
         """The explorer's layout, built once; shows the figure as it is now."""
         if self.__dict__.get("_layout") is None:
-            self._layout = self._build_layout(self._view.widget(self.fig))
+            self._layout = one_message_at_a_time(self._build_layout(self._view.widget(self.fig)),
+                                                 self.fig)
             self._redraw()
         return self._layout
 

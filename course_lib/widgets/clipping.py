@@ -26,7 +26,8 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from .. import clipping
 from ..plots.clipping import _closed, plot_clipping_2d, plot_view_volume, screen_points
-from ._view import FigureView, one_at_a_time
+from ._slider_echoes import MOVE, STALE, SliderEchoes
+from ._view import FigureView, one_at_a_time, one_message_at_a_time
 
 #: A triangle that sticks out of the volume through four planes, w != 1 for two vertices.
 DEFAULT_POLYGON = np.array([
@@ -83,6 +84,7 @@ class ClippingExplorer:
         self.last_update_ms = 0.0
         self._view = FigureView()                  # painted by the browser (issue 15)
         self._syncing = False
+        self._echoes = SliderEchoes()
 
         with plt.ioff():
             self.fig = plt.figure(figsize=(10.0, 4.6))
@@ -137,10 +139,11 @@ class ClippingExplorer:
                                        description="move", layout=widgets.Layout(width="180px"))
         reach = max(4.0, float(np.ceil(np.max(np.abs(self.P)))))   # room for every vertex
         self.coord_sliders = [
-            widgets.FloatSlider(value=float(self.P[0, c]), min=lo_, max=reach, step=0.05,
+            widgets.FloatSlider(min=lo_, max=reach, step=0.05,
                                 description=name, continuous_update=True, readout_format=".2f")
             for c, (name, lo_) in enumerate(zip(_COORDS, (-reach, -reach, -reach, -1.5)))]
         self.readout = widgets.HTML()
+        self._sync_sliders()
         self.step.observe(self._on_step, names="value")
         self.prev_button.on_click(lambda _: self._nudge(-1))
         self.next_button.on_click(lambda _: self._nudge(+1))
@@ -164,19 +167,32 @@ class ClippingExplorer:
     def _on_step(self, _change):
         self.update(recompute=False)
 
-    def _on_vertex(self, change):
+    def _on_vertex(self, _change):
+        self._sync_sliders()
+
+    def _sync_sliders(self):
+        """The coordinate sliders to the selected vertex."""
         self._syncing = True
         try:
             for c, s in enumerate(self.coord_sliders):
-                s.value = float(self.P[change["new"], c])
+                self._echoes.set(s, float(self.P[self.vertex.value, c]))
         finally:
             self._syncing = False
 
-    def _on_coord(self, _change):
+    def _on_coord(self, change):
+        """A coordinate slider moved: the student's move sets that coordinate of the selected
+        vertex; the page's echo of a value set here does not, and after the late echo of an
+        older value (the previous vertex's, when the vertex was switched quickly) the sliders
+        are set back to the vertex (:mod:`._slider_echoes`)."""
         if self._syncing:
             return
-        k = self.vertex.value
-        self.P[k] = [s.value for s in self.coord_sliders]
+        k, c = self.vertex.value, self.coord_sliders.index(change["owner"])
+        verdict = self._echoes.judge(change, self.P[k, c])
+        if verdict == STALE:
+            self._sync_sliders()
+        if verdict != MOVE:
+            return
+        self.P[k, c] = change["new"]
         self.update()
 
     # -- drawing -------------------------------------------------------------------------------
@@ -262,7 +278,8 @@ class ClippingExplorer:
     def widget(self):
         """The controls and the figure (painted by the browser) in one box."""
         if self.__dict__.get("_layout") is None:
-            self._layout = widgets.VBox([self.controls, self._view.widget(self.fig)])
+            self._layout = one_message_at_a_time(
+                widgets.VBox([self.controls, self._view.widget(self.fig)]), self.fig)
             self._view.redraw(self.fig)
         return self._layout
 

@@ -29,6 +29,7 @@ import numpy as np
 
 from .. import splines
 from ..plots.splines import EXAMPLE_POINTS, draw_curve, spline_scene, update_curve
+from ._slider_echoes import MOVE, STALE, SliderEchoes
 from ._view import FigureExplorer, one_at_a_time
 from ..plotting import new_figure
 
@@ -131,6 +132,7 @@ class SplineEndExplorer(FigureExplorer):
         self.phantoms = splines.extend_with_phantoms(self.points, "d=2c-b")[[0, -1]]
         self._drag = None
         self._syncing = False
+        self._echoes = SliderEchoes()
 
         lo, hi = self.points.min(axis=0), self.points.max(axis=0)
         span = max(float(np.max(hi - lo)), 1.0)
@@ -243,15 +245,30 @@ class SplineEndExplorer(FigureExplorer):
             self._sync_sliders()
 
     def _on_slider(self, change):
+        """A slider moved: the student's move sets that one coordinate of the selected point;
+        the page's echo of a value set here does not (:mod:`._slider_echoes`), and after the
+        late echo of an older value the sliders are set back to the point (a drag sets them
+        at its next move anyway)."""
         if self._syncing:
             return
-        self.set_point(self.point.value, (self.x.value, self.y.value))
+        c = 0 if change["owner"] is self.x else 1
+        xy = self.get_point(self.point.value)
+        verdict = self._echoes.judge(change, xy[c])
+        if verdict == STALE and self._drag is None:
+            self._sync_sliders()
+        if verdict != MOVE:
+            return
+        xy[c] = change["new"]
+        self.set_point(self.point.value, xy)
 
     def _sync_sliders(self):
         xy = self.get_point(self.point.value)
         self._syncing = True
-        self.x.value, self.y.value = float(xy[0]), float(xy[1])
-        self._syncing = False
+        try:
+            self._echoes.set(self.x, float(xy[0]))
+            self._echoes.set(self.y, float(xy[1]))
+        finally:
+            self._syncing = False
 
     # ---------------------------------------------------------------------------------------
     # dragging (the canvas' mouse events, as matplotlib MouseEvents; synthetic ones work too)

@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import ultrasound as us
 from ..plots import ultrasound as uplots
-from ._view import FigureView, one_at_a_time, readout_html
+from ._view import FigureView, one_at_a_time, one_message_at_a_time, readout_html
 
 
 class BScanExplorer:
@@ -94,7 +94,8 @@ class BScanExplorer:
         right = widgets.VBox(self.controls[3:6] + [self.tgc])
         self._view = FigureView()                  # painted by the browser (issue 15)
         view = self._view.widget(self.fig)
-        self.widget = widgets.VBox([widgets.HBox([left, right]), view, self.readout])
+        self.widget = one_message_at_a_time(
+            widgets.VBox([widgets.HBox([left, right]), view, self.readout]), self.fig)
         self._view.redraw(self.fig)                # the first frame
 
     # ---------------------------------------------------------------------------------------

@@ -401,3 +401,53 @@ def test_the_figure_lock_is_fair_and_re_entrant():
     assert order == ["first", "other", "again"]
     with pytest.raises(RuntimeError):
         lock.release()                                     # not held by this thread
+
+
+@pytest.mark.parametrize("name", sorted(MOVES))
+def test_every_message_to_an_explorer_waits_for_its_figure(name):
+    """ipykernel hands each widget's messages to the thread that last sent on its comm, so
+    one explorer's button and its sliders may be handled on two threads at once: every widget
+    in the layout (nested boxes too, and the canvas) handles its messages holding the figure's
+    lock. Oracle: a message delivered from another thread while this one holds the lock has
+    not been handled after 0.5 s, and is handled once the lock is released."""
+    import threading
+
+    import ipywidgets as W
+
+    cls, _ = MOVES[name]
+    ex = cls()
+    layout = ex.widget() if callable(ex.widget) else ex.widget
+    widgets, todo = [], [layout]
+    while todo:
+        w = todo.pop()
+        widgets.append(w)
+        todo.extend(getattr(w, "children", ()))
+    sliders = [w for w in widgets if isinstance(w, (W.FloatSlider, W.IntSlider))]
+    assert len(widgets) > 5 and sliders
+    handled = []
+    for w in widgets:
+        w.on_msg(lambda widget, content, buffers: handled.append(widget))
+    with _view.figure_lock(ex.fig):
+        threads = [threading.Thread(target=w.comm.handle_msg, args=(
+            {"content": {"data": {"method": "custom", "content": {"type": "test"}}},
+             "buffers": []},)) for w in widgets]
+        for t in threads:
+            t.start()
+        threads[0].join(0.5)
+        assert handled == [], f"{name}: a message was handled while the figure was locked"
+    for t in threads:
+        t.join(10)
+    assert {id(w) for w in handled} == {id(w) for w in widgets}
+    # the state a page sends goes through the same lock
+    slider = sliders[0]
+    with _view.figure_lock(ex.fig):
+        value = slider.min if slider.value != slider.min else slider.max
+        t = threading.Thread(target=slider.comm.handle_msg, args=(
+            {"content": {"data": {"method": "update", "state": {"value": value}}},
+             "buffers": []},))
+        t.start()
+        t.join(0.5)
+        assert slider.value != value
+    t.join(10)
+    assert slider.value == value
+    plt.close(ex.fig)
