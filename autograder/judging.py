@@ -75,7 +75,7 @@ def judge_case(ex: Exercise, case, expected, outcome: CaseOutcome) -> tuple[Verd
         return Verdict.REJECTED, outcome.message or "returned something that is not plain numbers"
     if kind is OutcomeKind.REFERENCE_USED:
         return Verdict.REFERENCE_USED, outcome.message or "called the reference implementation"
-    return Verdict.ERROR, outcome.message or "not run"
+    return Verdict.NOT_RUN, outcome.message or "not run"
 
 
 def _judge_returned(ex, case, expected, value) -> tuple[Verdict, str]:

@@ -50,6 +50,7 @@ class Verdict(str, enum.Enum):
     TIMEOUT = "timeout"
     REJECTED = "rejected"
     REFERENCE_USED = "reference-used"
+    NOT_RUN = "not-run"                 #: never run (the time was used up; see its reason)
 
 
 class Status(str, enum.Enum):
@@ -102,7 +103,7 @@ VERDICT_STATUS = {
     Verdict.WRONG_VALUE: Status.FAILED, Verdict.WRONG_SHAPE: Status.FAILED,
     Verdict.UNANSWERED: Status.UNANSWERED, Verdict.ERROR: Status.ERROR,
     Verdict.TIMEOUT: Status.TIMEOUT, Verdict.REJECTED: Status.REJECTED_OUTPUT,
-    Verdict.REFERENCE_USED: Status.REFERENCE_USED,
+    Verdict.REFERENCE_USED: Status.REFERENCE_USED, Verdict.NOT_RUN: Status.ERROR,
 }
 
 #: How a failing verdict reads in a summary ("3 wrong value, 1 timed out").
@@ -111,7 +112,7 @@ VERDICT_WORDS = {
     Verdict.WRONG_VALUE: "wrong value", Verdict.WRONG_SHAPE: "wrong shape or type",
     Verdict.UNANSWERED: "no answer", Verdict.ERROR: "raised an error",
     Verdict.TIMEOUT: "timed out", Verdict.REJECTED: "returned something that is not plain numbers",
-    Verdict.REFERENCE_USED: "used the reference",
+    Verdict.REFERENCE_USED: "used the reference", Verdict.NOT_RUN: "not run",
 }
 
 

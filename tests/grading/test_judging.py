@@ -63,6 +63,20 @@ def test_score_is_points_times_the_fraction_passed():
     assert score == pytest.approx(1.0) and status is Status.TIMEOUT
 
 
+def test_cases_left_unrun_after_timeouts_read_as_not_run():
+    """Three cases in a row timed out, so the sandbox ran no more (isolation/child.py): the
+    rest read "not run" with the sandbox's reason, not "raised an error"."""
+    why = "not run: the 3 cases before it timed out"
+    verdict, reason = judge_case(_ex(close()), CASE, 1.0,
+                                 CaseOutcome(3, OutcomeKind.NOT_RUN, message=why))
+    assert verdict is Verdict.NOT_RUN and reason == why
+    records = [CaseRecord(i, "", False, v, reason=r) for i, (v, r) in enumerate(
+        [(Verdict.TIMEOUT, "took longer than 2 s")] * 3 + [(Verdict.NOT_RUN, why)] * 2)]
+    score, status, message = summarise(records, 2.0)
+    assert score == 0 and status is Status.TIMEOUT
+    assert "3 timed out, 2 not run" in message and "error" not in message
+
+
 @pytest.mark.parametrize("code,shape", [
     ("def f(x):\n    '''doc'''\n    # YOUR CODE HERE\n    raise NotImplementedError()\n",
      AnswerShape.UNTOUCHED),
