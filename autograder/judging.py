@@ -74,7 +74,7 @@ def judge_case(ex: Exercise, case, expected, outcome: CaseOutcome) -> tuple[Verd
     if kind is OutcomeKind.REJECTED:
         return Verdict.REJECTED, outcome.message or "returned something that is not plain numbers"
     if kind is OutcomeKind.REFERENCE_USED:
-        return Verdict.REFERENCE_USED, outcome.message or "called the reference implementation"
+        return Verdict.REFERENCE_USED, outcome.message or "used course_lib, the reference library"
     return Verdict.NOT_RUN, outcome.message or "not run"
 
 
@@ -249,9 +249,9 @@ def _how_to_answer(name: str, kind: CellKind) -> str:
 
 def reference_imported(name: str, reference: str) -> tuple[Status, str]:
     """The status of a graded function whose cell imports the course's reference."""
-    return Status.REFERENCE_USED, (f"the cell of {name} imports {reference}, the course's "
-                                   "reference implementation: a graded function must be your "
-                                   "own work, so this test scores 0")
+    return Status.REFERENCE_USED, (f"the cell of {name} imports {reference}, from course_lib, "
+                                   "the course's reference library: a graded function may use "
+                                   "only NumPy and your own answers, so this test scores 0")
 
 
 # --------------------------------------------------------------------------------------------

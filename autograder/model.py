@@ -82,8 +82,8 @@ STATUS_MEANING = {
     Status.TIMEOUT: "the function took longer than the time limit on some cases",
     Status.REJECTED_OUTPUT: "the function returned something that is not plain numbers (an "
                             "object of its own class, an array subclass, a result too large)",
-    Status.REFERENCE_USED: "the code imported or called the course's reference implementation "
-                           "(score 0)",
+    Status.REFERENCE_USED: "the code imported or called course_lib, the course's reference "
+                           "library, which graded code may not use (score 0)",
     Status.MISSING: "the notebook was not submitted (or was renamed), or its solution cell is "
                     "gone",
     Status.UNREADABLE: "the notebook file could not be read: invalid JSON, an old notebook "

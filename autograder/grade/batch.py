@@ -351,7 +351,8 @@ def _records(ex, kind: CellKind, drawn: list[DrawnCase], run: NameRun,
     for i, (d, outcome) in enumerate(zip(drawn, run.outcomes, strict=True)):
         verdict, reason = judging.judge_case(ex, d.case, d.expected, outcome)
         if verdict is Verdict.REFERENCE_USED and not (show or d.case.visible):
-            reason = "used the course's reference (not available while grading)"
+            reason = "used course_lib, the course's reference library (graded code may not " \
+                     "use it)"
         received = outcome.value if verdict in (Verdict.PASS, Verdict.WRONG_VALUE,
                                                 Verdict.WRONG_SHAPE) else None
         records.append(CaseRecord(

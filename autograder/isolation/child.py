@@ -452,7 +452,8 @@ def _run_cell(label: str, source: str, ns: dict, timeout: float) -> tuple[str, s
         ref = reference_module(exc)
         note = f"cell {label} raised {_exc_name(exc)}: {_safe_str(exc, 300)}"
         if ref:
-            note += f" ({ref} is the course's reference, not available while grading)"
+            note += f" ({ref} is from course_lib, the course's reference library, which " \
+                    "graded code may not use)"
         return note, ref
     return "", ""
 
@@ -491,7 +492,8 @@ def _call_case(nj: dict, ns: dict, case: dict, limits: dict) -> dict:
         ref = reference_module(exc)
         if ref:
             return {"kind": "reference-used",
-                    "message": f"used {ref}, the course's reference (not available while grading)"}
+                    "message": f"used {ref}, from course_lib, the course's reference library "
+                               "(graded code may not use it)"}
         return {"kind": "raised", "etype": _exc_name(exc), "mro": _exc_mro(exc),
                 "message": _safe_str(exc, 500)}
     return _encode_result(value, int(case["cap"]))
@@ -517,8 +519,9 @@ def _case_record(nj: dict, i: int, ns: dict, limits: dict, reference: str, captu
         rec = _call_case(nj, ns, case, limits)
     elif reference:
         rec = {"kind": "reference-used",
-               "message": f"{nj['name']!r} is not defined: its cell used {reference}, the "
-                          "course's reference (not available while grading)"}
+               "message": f"{nj['name']!r} is not defined: its cell used {reference}, from "
+                          "course_lib, the course's reference library (graded code may not "
+                          "use it)"}
     else:
         rec = {"kind": "not-run", "message": f"{nj['name']!r} is not defined after its cells"}
     rec.update(t="case", name=nj["name"], i=i, seconds=time.monotonic() - t0,
