@@ -109,8 +109,15 @@ class FairLock:
                 self._depth += 1
                 return True
             self._queue.append(me)
-            while self._owner is not None or self._queue[0] != me:
-                self._cond.wait()
+            try:
+                while self._owner is not None or self._queue[0] != me:
+                    self._cond.wait()
+            except BaseException:
+                # interrupted while waiting (Stop pressed on a cell that waits to save): give
+                # up this place in the queue, or the threads behind it would wait for good
+                self._queue.remove(me)
+                self._cond.notify_all()
+                raise
             self._queue.popleft()
             self._owner, self._depth = me, 1
             return True

@@ -451,3 +451,46 @@ def test_every_message_to_an_explorer_waits_for_its_figure(name):
     t.join(10)
     assert slider.value == value
     plt.close(ex.fig)
+
+
+def test_a_wait_for_the_figure_lock_that_is_interrupted_gives_up_its_place():
+    """Stop pressed on a cell that waits for the lock (a save while the explorer redraws):
+    the interrupted thread leaves the queue, so the lock still goes to the next thread (red
+    team 6: before, every later page message to the explorer waited for good). Oracle: another
+    thread gets the lock after the holder releases it."""
+    import signal
+    import threading
+    import time
+
+    lock = _view.FairLock()
+    holding, release = threading.Event(), threading.Event()
+
+    def holder():
+        with lock:
+            holding.set()
+            release.wait(10)
+
+    first = threading.Thread(target=holder, daemon=True)   # daemons: a failure cannot hang
+    first.start()
+    holding.wait(5)
+
+    def interrupt(*_):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 0.2)
+        with pytest.raises(KeyboardInterrupt):
+            with lock:                                   # waits, then is interrupted
+                pass
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+    got = threading.Event()
+    second = threading.Thread(target=lambda: (lock.acquire(), got.set(), lock.release()),
+                              daemon=True)
+    second.start()
+    release.set()
+    first.join(5)
+    assert got.wait(5), "the lock never went to the next thread after the interrupted wait"
+    second.join(5)
