@@ -460,7 +460,6 @@ def test_a_wait_for_the_figure_lock_that_is_interrupted_gives_up_its_place():
     thread gets the lock after the holder releases it."""
     import signal
     import threading
-    import time
 
     lock = _view.FairLock()
     holding, release = threading.Event(), threading.Event()
