@@ -14,6 +14,8 @@ import matplotlib
 
 matplotlib.use("Agg")
 
+import time
+
 import ipywidgets as W
 import matplotlib.pyplot as plt
 import numpy as np
@@ -38,7 +40,7 @@ def on_grid(slider, value):
 
 class Clock:
     def __init__(self):
-        self.now = 100.0
+        self.now = time.monotonic()
 
     def __call__(self):
         return self.now
@@ -87,11 +89,31 @@ def test_the_rule(slider):
     echoes.set(slider, 3.4567)
     echoes.set(slider, 4.4444)
     assert judged(echoes, slider, on_grid(slider, 4.4444), current=4.4444) == [ECHO]
-    # a value the kernel never set: the student's move, after which nothing is remembered
+    # a value the kernel never set, once the page shows the latest: the student's move,
+    # after which nothing is remembered
     echoes.set(slider, 5.5555)
     echoes.set(slider, 6.6666)
+    clock.now += _slider_echoes.DISPLAY_LAG_S + 0.1
     assert judged(echoes, slider, 0.5, current=6.6666) == [MOVE]
     assert judged(echoes, slider, on_grid(slider, 5.5555), current=6.6666) == [MOVE]
+
+
+def test_a_key_pressed_before_the_page_showed_the_latest_value_is_set_back(slider):
+    """The playtest's case: the point switched from p1 (x = 1) to p2 (x = 3) and a key pressed
+    on x at once stepped from the 1.00 the page still showed. Every such step is set back; once
+    the page shows 3.00, a step from it is a move."""
+    clock = Clock()
+    echoes = SliderEchoes(clock)
+    for v in (1.0, 6.0, 3.0):                       # p1, then p4, then p2 selected quickly
+        echoes.set(slider, v)
+    assert [judged(echoes, slider, v, current=3.0)[0] for v in (1.01, 1.02, 1.03)] == \
+        [STALE] * 3
+    assert judged(echoes, slider, 3.01, current=3.0) == [MOVE]
+    # the same first step after the page has had time to show 3.00 is a move
+    echoes.set(slider, 1.0)
+    echoes.set(slider, 3.0)
+    clock.now += _slider_echoes.DISPLAY_LAG_S + 0.1
+    assert judged(echoes, slider, 1.01, current=3.0) == [MOVE]
 
 
 def test_an_echo_is_only_expected_for_a_while(slider, monkeypatch):
@@ -175,6 +197,7 @@ def test_a_students_slider_move_sets_one_coordinate(spline):
 
 def test_a_late_echo_of_the_previous_vertex_leaves_the_clipping_vertex_alone():
     ex = ClippingExplorer()
+    clock = ex._echoes._clock = Clock()
     try:
         first = ex.P[ex.vertex.value].copy()
         ex.vertex.value = 2
@@ -185,7 +208,22 @@ def test_a_late_echo_of_the_previous_vertex_leaves_the_clipping_vertex_alone():
             page_sends(ex.coord_sliders[c], float(first[c]))
         np.testing.assert_array_equal(ex.P[2], here)
         np.testing.assert_allclose([s.value for s in ex.coord_sliders], here, atol=1e-12)
+        clock.now += _slider_echoes.DISPLAY_LAG_S + 0.1
         page_sends(ex.coord_sliders[moved[0]], float(first[moved[0]]))    # now a move
         assert ex.P[2, moved[0]] == pytest.approx(first[moved[0]])
     finally:
         plt.close(ex.fig)
+
+
+def test_a_quick_switch_then_a_key_leaves_every_point_where_it_was(spline):
+    """Playtest 6: p0, p3, p1, p4, p2 picked 60 ms apart, then ArrowRight pressed on x three
+    times while the page still showed p1's x: p4 had taken p1's x plus a step."""
+    before = spline.points.copy()
+    for k in (0, 3, 1, 4, 2):
+        spline.point.set_state({"index": k})         # a Dropdown syncs its index
+    assert spline.point.value == 2
+    shown = before[1, 0]                              # what the page still showed
+    for press in (1, 2, 3):
+        page_sends(spline.x, on_grid(spline.x, shown) + press * spline.x.step)
+    np.testing.assert_array_equal(spline.points, before)
+    assert spline.x.value == pytest.approx(before[2, 0])   # the slider back on p2's x
