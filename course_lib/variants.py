@@ -325,10 +325,18 @@ def my_variant(notebook: str, typed: str = "", *, quiet: bool = False,
 
 
 class _NoStudentYet:
-    """``mine`` before the student id is known: every use explains what to do."""
+    """``mine`` before the student id is known: every use explains what to do. Showing a
+    multiple-choice item's options says so without an error (the options come in the student's
+    own order, so none can be shown yet), so Run All goes on past them."""
 
     def __init__(self, notebook: str, why: str):
         self._notebook, self._why = notebook, why
+
+    def options(self, name: str, texts) -> None:
+        """In place of item ``name``'s options: what to do to see them."""
+        print(f"The options of {name} appear here, lettered in your own order, once your "
+              "student id is known: type it in STUDENT_ID (near the top) and run that cell, "
+              "then this one.")
 
     def __getattr__(self, name):
         if name.startswith("_"):

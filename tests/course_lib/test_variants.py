@@ -88,8 +88,16 @@ def test_before_the_id_is_typed_every_use_says_what_to_do(no_id):
     mine = my_variant("q5_phong", quiet=True, missing_ok=True)
     with pytest.raises(ValueError, match="STUDENT_ID"):
         _ = mine.N
-    with pytest.raises(ValueError, match="STUDENT_ID"):
-        mine.options("x", ["a", "b"])
+
+
+
+def test_before_the_id_is_typed_options_say_what_to_do_without_an_error(no_id, capsys):
+    """Run All goes on past an item's options (playtest 6: it stopped at the first one)."""
+    mine = my_variant("q5_phong", quiet=True, missing_ok=True)
+    mine.options("x", ["first option", "second option"])
+    out = capsys.readouterr().out
+    assert "STUDENT_ID" in out
+    assert "first option" not in out and "second option" not in out     # no order yet
 
 
 def test_an_unknown_number_name_lists_the_known_ones():
