@@ -21,6 +21,7 @@ from .. import judging
 from ..course import TEXT_STUB
 from ..exercises import REGISTRY
 from ..isolation import CaseInput, Limits, Mode, NameJob, NotebookJob
+from ..isolation.child import OFF_LIMITS
 from ..isolation.jobs import CHOICE, FUNCTION
 from ..model import (ASSIGNMENT, AnswerHint, AnswerShape, Batch, CaseOutcome, CaseRecord, CellKind,
                      CellResult, NameRun, OutcomeKind, SourceNotebook, Status, Submission, Verdict)
@@ -351,8 +352,7 @@ def _records(ex, kind: CellKind, drawn: list[DrawnCase], run: NameRun,
     for i, (d, outcome) in enumerate(zip(drawn, run.outcomes, strict=True)):
         verdict, reason = judging.judge_case(ex, d.case, d.expected, outcome)
         if verdict is Verdict.REFERENCE_USED and not (show or d.case.visible):
-            reason = "used course_lib, the course's reference library (graded code may not " \
-                     "use it)"
+            reason = f"used {OFF_LIMITS}"
         received = outcome.value if verdict in (Verdict.PASS, Verdict.WRONG_VALUE,
                                                 Verdict.WRONG_SHAPE) else None
         records.append(CaseRecord(

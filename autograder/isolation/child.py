@@ -57,6 +57,8 @@ ALLOWED_REFERENCE = {"course_lib.marching_cubes": ("CORNERS", "EDGES", "FACES", 
 #: (``variants`` draws each student's numbers; the grader computes the answers on its side).
 ALLOWED_WHOLE_MODULES = ("course_lib.variants",)
 ALLOWED_COURSE_MODULES = ("course_lib", *ALLOWED_REFERENCE, *ALLOWED_WHOLE_MODULES)
+#: What the grading says of a course_lib import it met (the notebooks' own words).
+OFF_LIMITS = "course_lib, the course's reference library, which graded code may not use"
 
 
 # ============================================================================================
@@ -452,8 +454,7 @@ def _run_cell(label: str, source: str, ns: dict, timeout: float) -> tuple[str, s
         ref = reference_module(exc)
         note = f"cell {label} raised {_exc_name(exc)}: {_safe_str(exc, 300)}"
         if ref:
-            note += f" ({ref} is from course_lib, the course's reference library, which " \
-                    "graded code may not use)"
+            note += f" ({ref} is from {OFF_LIMITS})"
         return note, ref
     return "", ""
 
@@ -492,8 +493,7 @@ def _call_case(nj: dict, ns: dict, case: dict, limits: dict) -> dict:
         ref = reference_module(exc)
         if ref:
             return {"kind": "reference-used",
-                    "message": f"used {ref}, from course_lib, the course's reference library "
-                               "(graded code may not use it)"}
+                    "message": f"used {ref}, from {OFF_LIMITS}"}
         return {"kind": "raised", "etype": _exc_name(exc), "mro": _exc_mro(exc),
                 "message": _safe_str(exc, 500)}
     return _encode_result(value, int(case["cap"]))
@@ -519,9 +519,8 @@ def _case_record(nj: dict, i: int, ns: dict, limits: dict, reference: str, captu
         rec = _call_case(nj, ns, case, limits)
     elif reference:
         rec = {"kind": "reference-used",
-               "message": f"{nj['name']!r} is not defined: its cell used {reference}, from "
-                          "course_lib, the course's reference library (graded code may not "
-                          "use it)"}
+               "message": f"{nj['name']!r} is not defined: its cell used {reference}, "
+                          f"from {OFF_LIMITS}"}
     else:
         rec = {"kind": "not-run", "message": f"{nj['name']!r} is not defined after its cells"}
     rec.update(t="case", name=nj["name"], i=i, seconds=time.monotonic() - t0,
