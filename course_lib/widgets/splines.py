@@ -76,25 +76,25 @@ def formulas_html(kind: str, rule: str, end=None) -> str:
     """The HTML+LaTeX of ``p, p', p''`` at ``t = 1`` for ``kind`` terminated by ``rule``.
 
     Q4(b) general rows first, then with the rule substituted (Q4(c)(i)); with ``end = (p, p1,
-    p2)`` the current numeric values are appended.
+    p2)`` the current numeric values are appended. One equation per line, indented under its
+    heading, so the panel never needs scrolling sideways.
     """
     M = splines.basis(kind)
-    general = splines.end_weights(M, "free")
     names = ("\\mathbf p", "\\mathbf p'", "\\mathbf p''")
-    title = _KIND_TITLE[kind]
 
-    def block(Wt):
-        return ", \\quad ".join(f"{n} = {combination_tex(w)}" for n, w in zip(names, Wt))
+    def block(heading, rows):
+        lines = "<br>".join(f"${n} = {row}$" for n, row in zip(names, rows))
+        return f"{heading}<div style='margin-left: 1.5em'>{lines}</div>"
 
-    html = [f"<b>{title}</b>, end of the last segment (t = 1):<br>",
-            f"general (Q4(b)): ${block(general)}$<br>"]
+    html = [f"<b>{_KIND_TITLE[kind]}</b>, end of the last segment (t = 1):<br>",
+            block("general (Q4(b)):", map(combination_tex, splines.end_weights(M, "free")))]
     if rule == "free":
-        html.append("phantom point <b>d</b> placed freely: the general rows apply.<br>")
+        html.append("phantom point <b>d</b> placed freely: the general rows apply.")
     else:
-        html.append(f"with ${_RULE_TEX[rule]}$: ${block(splines.end_weights(M, rule))}$<br>")
+        html.append(block(f"with ${_RULE_TEX[rule]}$:",
+                          map(combination_tex, splines.end_weights(M, rule))))
     if end is not None:
-        vals = ", \\quad ".join(f"{n} = ({v[0]:.2f},\\ {v[1]:.2f})" for n, v in zip(names, end))
-        html.append(f"here: ${vals}$")
+        html.append(block("here:", (f"({v[0]:.2f},\\ {v[1]:.2f})" for v in end)))
     return "".join(html)
 
 
@@ -149,7 +149,7 @@ class SplineEndExplorer(FigureExplorer):
         self.y = W.FloatSlider(description="y", min=self.limits[0, 1], max=self.limits[1, 1],
                                step=0.01, continuous_update=True, readout_format=".2f")
         self.show_hull = W.Checkbox(value=True, description="B-spline convex hull")
-        self.formulas = W.HTMLMath(layout=W.Layout(width="420px", overflow="auto"))
+        self.formulas = W.HTMLMath(layout=W.Layout(width="420px"))
         self.status = W.Label()
 
         with plt.ioff():

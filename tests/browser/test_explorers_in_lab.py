@@ -105,6 +105,12 @@ def test_spline_explorer_end_rule_changes_figure(page, lab_server, artifacts):
     frac = wait_for_change(canvas, before)
     out.screenshot(path=str(artifacts / "q4-explorer-after.png"))
     assert frac >= 0.002, f"the spline figure did not change after moving a control ({frac:.4f})"
+    # the formulas, typeset, fit their panel: nothing hides past its right edge
+    formulas = out.locator(".widget-htmlmath", has_text="general (Q4(b))").first
+    formulas.locator("mjx-container").first.wait_for(timeout=20_000)
+    assert formulas.locator("mjx-container").count() >= 9   # three rows of p, p', p''
+    width, inner = formulas.evaluate("el => [el.clientWidth, el.scrollWidth]")
+    assert inner <= width, f"the formulas are {inner} px wide in a {width} px panel"
 
 
 def test_phong_explorer_controls_change_figure(page, lab_server, artifacts):
