@@ -339,7 +339,6 @@ class CollimatorExplorer(FigureExplorer):
         lab["R"].set_text(f"R = d(L+z)/L = {R:.3g} mm")
         lab["R"].set_position((0.0, z + 0.03 * (z + L)))
         lab["L"].set_text(f"L = {L:g} mm")
-        lab["L"].set_position((-0.97 * span, -L / 2))
         lab["d"].set_text(f"d = {d:g} mm")
         lab["d"].set_position((0.0, 0.02 * (L + z)))
         lab["z"].set_text(f"z = {z:g} mm")
@@ -349,6 +348,21 @@ class CollimatorExplorer(FigureExplorer):
         (x0, x1), (y0, y1) = self.side_limits
         self._side_fit.clear().translate(-x0, -y0).scale(2.0 / (x1 - x0), 1.0 / (y1 - y0))
         self._side_fit.translate(-1.0, 0.0)
+        self._place_length_label(L, z, span)
+
+    def _place_length_label(self, L, z, span):
+        """Beside the septa while they stand at least two lines of text tall on screen; below
+        the crystal (left, as "crystal" is right) once z dwarfs L, never over the crystal bar."""
+        label = self.art["side"]["labels"]["L"]
+        (_, _), (y0, y1) = self.side_limits
+        septum_px = L / (y1 - y0) * self.ax_side.bbox.height
+        line_px = 1.5 * label.get_fontsize() * self.fig.dpi / 72.0
+        if septum_px >= 2.0 * line_px:
+            label.set_position((-0.97 * span, -L / 2))
+            label.set_verticalalignment("center")
+        else:
+            label.set_position((-0.97 * span, -L - 0.025 * (L + z)))
+            label.set_verticalalignment("top")
 
     def _readout_html(self, d, L, z, res) -> str:
         head = (f"face radius {res['face_radius']:g} mm, {res['n_holes']} holes; "

@@ -201,3 +201,23 @@ def test_face_views_step_through_fixed_sizes_that_hold_the_whole_face():
                 kept, changed = kept + (lim == previous), changed + (lim != previous)
             previous = lim
     assert kept > 2 * changed
+
+
+@pytest.mark.parametrize("L, z", [(250.0, 10.0), (40.0, 1000.0), (5.0, 3000.0), (100.0, 100.0)])
+def test_side_view_length_label_stays_off_the_crystal(explorer, L, z):
+    """The "L = ... mm" label never covers the crystal bar (its 4 pt line at -L), stays inside
+    the side view, and sits beside the septa whenever they are tall enough to hold it."""
+    explorer.set(L=L, z=z)
+    explorer.fig.canvas.draw()
+    renderer = explorer.fig.canvas.get_renderer()
+    label = explorer.art["side"]["labels"]["L"]
+    box = label.get_bbox_patch().get_window_extent(renderer)
+    crystal = explorer.art["side"]["crystal"]
+    half_bar = crystal.get_linewidth() * explorer.fig.dpi / 72.0 / 2
+    bar_y = crystal.get_transform().transform([[0.0, -L]])[0, 1]
+    assert box.y1 < bar_y - half_bar or box.y0 > bar_y + half_bar, (box, bar_y)
+    axes = explorer.ax_side.get_window_extent(renderer)
+    assert axes.x0 <= box.x0 and box.x1 <= axes.x1 and axes.y0 <= box.y0 and box.y1 <= axes.y1
+    face_y = crystal.get_transform().transform([[0.0, 0.0]])[0, 1]
+    if face_y - bar_y > 3 * box.height:       # septa tall on screen: the label is beside them
+        assert bar_y < box.y0 and box.y1 < face_y
