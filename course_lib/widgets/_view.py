@@ -242,8 +242,15 @@ class Blitter:
         fig.canvas.mpl_connect("draw_event", self._on_draw_event)
 
     def _on_draw_event(self, _event):
-        if not self._own_draw:  # a draw from elsewhere (resize, dpi ratio): start again
+        if not self._own_draw:  # a draw from elsewhere (resize, dpi ratio, savefig): start again
             self.background = None
+            self._forget_pictures()
+
+    def _forget_pictures(self) -> None:
+        """After a draw from elsewhere: pictures kept of unchanged artists can no longer be
+        trusted, since that draw cleared every artist's ``stale`` flag, changed or not (a
+        ``savefig`` between an update and its put-off frame; playtest 7)."""
+        self.sprites = None
 
     def signature(self) -> tuple:
         """What the background depends on: the figure's size and dpi, and each axes' position,
@@ -394,6 +401,9 @@ class ScenePainter(Blitter):
         self._renderer = None
         self._kept = KeptPictures()          # each unchanged artist's recorded items
         canvas_widget.on_msg(self._on_msg)
+
+    def _forget_pictures(self) -> None:
+        self._kept.clear()
 
     def _draw_all(self):
         before = self._signature

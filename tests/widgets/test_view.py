@@ -306,29 +306,85 @@ def test_kept_scene_items_are_what_a_fresh_recording_gives(name):
     """Unchanged artists' items are reused from the frame before (by ``stale`` and, for
     colour-mapped collections, by their data array): after every move the scene sent must be
     the scene a painter with nothing kept records from the same figure."""
-    from course_lib.widgets._canvas import FigureCanvas
     from course_lib.widgets._scene import unpack
 
     cls, moves = MOVES[name]
     ex = cls()
     ex.update()
-    canvas = ex._view.blitter.widget
+    painter = ex._view.blitter
     for attr, value in moves:
         _control(ex, attr).value = value
-        sent = unpack(canvas.scene)["items"]
-        fresh_painter = _view.ScenePainter(ex.fig, FigureCanvas())
-        fresh_painter.redraw()
-        fresh = unpack(fresh_painter.widget.scene)["items"]
-        ex._view.blitter.background = None          # the fresh painter drew the figure
-        assert [i["k"] for i in sent] == [i["k"] for i in fresh], (name, attr)
-        for a, b in zip(sent, fresh):
-            for key in ("fill", "stroke", "fills", "strokes", "lw", "dash"):
-                assert a.get(key) == b.get(key), (name, attr, key)
-            for key in ("v", "at"):
-                if key in a:
-                    np.testing.assert_allclose(a[key], b[key], rtol=0, atol=1e-3)
-            if "rgba" in a:
-                np.testing.assert_array_equal(a["rgba"], b["rgba"])
+        sent = unpack(painter.widget.scene)["items"]
+        painter._own_draw = True      # the fresh painter's draw must not reset this one's store
+        try:
+            fresh = _fresh_scene(ex.fig)
+        finally:
+            painter._own_draw = False
+        painter.background = None                   # the fresh painter drew the figure
+        _assert_same_scene(sent, fresh, (name, attr))
+    plt.close(ex.fig)
+
+
+def _fresh_scene(fig) -> list:
+    """The scene items a painter with nothing kept records from ``fig`` as it is now."""
+    from course_lib.widgets._canvas import FigureCanvas
+    from course_lib.widgets._scene import unpack
+
+    fresh_painter = _view.ScenePainter(fig, FigureCanvas())
+    fresh_painter.redraw()
+    return unpack(fresh_painter.widget.scene)["items"]
+
+
+def _assert_same_scene(sent, fresh, where) -> None:
+    assert [i["k"] for i in sent] == [i["k"] for i in fresh], where
+    for a, b in zip(sent, fresh):
+        for key in ("fill", "stroke", "fills", "strokes", "lw", "dash"):
+            assert a.get(key) == b.get(key), (*where, key)
+        for key in ("v", "at"):
+            if key in a:
+                np.testing.assert_allclose(a[key], b[key], rtol=0, atol=1e-3)
+        if "rgba" in a:
+            np.testing.assert_array_equal(a["rgba"], b["rgba"])
+
+
+@pytest.mark.parametrize("name", sorted(MOVES))
+def test_a_figure_saved_before_a_put_off_frame_leaves_that_frame_right(name):
+    """Playtest 7: a move whose frame is put off (frames outrun), then ``savefig`` from a cell
+    before that frame is drawn. The save's full draw clears every artist's ``stale`` flag, so
+    the frame must not trust what it kept of "unchanged" artists: the scene it sends is the
+    one a painter with nothing kept records (before the fix, the old pictures of the moved
+    artists were sent and the canvas kept showing the state before the move)."""
+    import asyncio
+    import io
+    import threading
+    import time
+
+    from course_lib.widgets._scene import unpack
+
+    cls, moves = MOVES[name]
+    ex = cls()
+    ex.update()                                            # no event loop: drawn at once
+    painter = ex._view.blitter
+    attr, value = moves[0]
+
+    async def move_then_save():
+        painter._cost, painter._finished = 0.3, time.perf_counter()   # a frame just sent
+        _control(ex, attr).value = value
+        assert painter._deferred is not None               # its frame is put off
+        ex.fig.savefig(io.BytesIO(), format="png")         # a cell saves the figure
+        await asyncio.sleep(0.6)                           # the put-off frame is drawn
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(_view, "_running_loop", _running_loop_of_this_thread)
+        failed = []
+        thread = threading.Thread(target=lambda: _record(lambda: asyncio.run(move_then_save()),
+                                                         failed))
+        thread.start()
+        thread.join(30)
+    assert not failed, failed
+    assert painter._deferred is None
+    sent = unpack(painter.widget.scene)["items"]
+    _assert_same_scene(sent, _fresh_scene(ex.fig), (name, attr))
     plt.close(ex.fig)
 
 
