@@ -151,6 +151,12 @@ def config_text(db_url: str, exchange_root: Path | None = None) -> str:
         "# keep notebook checkpoints and caches out of the release",
         "c.CourseDirectory.ignore = "
         "['.ipynb_checkpoints', '*.pyc', '__pycache__', 'feedback', '.*']",
+        "",
+        "# the Formgrader shows students' written answers as text, never as live HTML",
+        "# (autograder/outputs/safe_markdown.py): markdown sanitised, raw cells not rendered",
+        "c.HTMLExporter.filters = "
+        "{'markdown2html': 'autograder.outputs.safe_markdown.markdown2html'}",
+        "c.HTMLExporter.raw_mimetypes = []",
     ]
     if exchange_root is not None:
         lines += ["", f"c.Exchange.root = {str(exchange_root)!r}"]

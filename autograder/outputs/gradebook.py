@@ -13,7 +13,8 @@ nbgrader stays the instructors' workflow: formgrader reads the gradebook for the
   locked text) restored from the source by ``grade_id`` (hidden tests removed, so even nbgrader's
   own ``generate_feedback`` cannot leak them), duplicates demoted to plain cells, cells whose
   metadata was stripped re-tagged, missing cells re-inserted, outputs cleared, and each test cell
-  carrying the grader's verdict as its output.
+  carrying the grader's verdict as its output; a student's raw cell becomes a markdown cell
+  quoting it (the Formgrader would show a raw cell's HTML as is: see ``safe_markdown``).
 
 The course root is the folder holding ``SUBMITTED`` when that is an nbgrader course
 (``<root>/submitted`` next to ``<root>/source/tripos2006``), otherwise ``OUT``; the gradebook is
@@ -35,6 +36,7 @@ from pathlib import Path
 
 from ..course import default_db_url
 from ..model import ASSIGNMENT, Batch, CellKind, CellResult, SourceNotebook, Status, Submission
+from .safe_markdown import quoted_raw_cell
 
 COURSE_ID = "4f9"
 #: Files of a submission folder the autograded folder keeps: nbgrader's ``release_feedback``
@@ -345,6 +347,8 @@ def _merge(src: SourceNotebook, sub: Submission) -> list[dict]:
             if meta is not None:
                 cell["metadata"]["nbgrader"] = copy.deepcopy(meta.meta)
                 present.add(by_name[k])
+        if cell.get("cell_type") == "raw":      # the course has none: a student's, never HTML
+            cell = quoted_raw_cell(cell)
         cells.append(cell)
     # re-insert the graded and trusted cells that are gone, after their source predecessor
     for scell in src.cells:

@@ -1,0 +1,102 @@
+"""Students' written answers in the marker's Formgrader, shown as text and never run.
+
+nbgrader's Formgrader renders every markdown cell of an autograded notebook with nbconvert's
+``markdown2html``, which passes raw HTML through, and shows raw cells verbatim. A written
+answer holding ``<script>``, ``<img onerror=...>``, ``<style>`` or a ``javascript:`` link
+therefore ran in the marker's browser, with the marker's session: red team 7 gave itself full
+marks on answers nobody had read and zeroed classmates' grades that way.
+
+Two layers, both set up for the course by :func:`autograder.course.nbgrader_config`:
+
+* :func:`markdown2html` replaces the Formgrader's filter of that name
+  (``c.HTMLExporter.filters``): nbconvert renders the markdown exactly as before, then the HTML
+  goes through an allow-list (bleach, nbconvert's own sanitiser): formatting, lists, tables,
+  links to ``http(s)``/``mailto``/the page itself, images that are ``data:`` rasters (a pasted
+  sketch) or relative. Anything else is escaped, so the marker reads the attempt as text.
+  MathJax text (``$...$``) and code blocks come out as nbconvert rendered them.
+* raw cells are not shown as HTML (``c.HTMLExporter.raw_mimetypes = []``), and the grader
+  turns a student's raw cell into a markdown cell quoting it (:func:`quoted_raw_cell`).
+"""
+
+from __future__ import annotations
+
+import re
+
+import bleach
+from jinja2 import pass_context
+
+__all__ = ["ALLOWED_TAGS", "clean_html", "markdown2html", "quoted_raw_cell"]
+
+#: HTML that nbconvert's markdown renderer produces for ordinary markdown, and nothing more
+ALLOWED_TAGS = frozenset({
+    "a", "abbr", "b", "blockquote", "br", "code", "del", "details", "div", "em", "h1", "h2",
+    "h3", "h4", "h5", "h6", "hr", "i", "img", "kbd", "li", "ol", "p", "pre", "s", "span",
+    "strong", "sub", "summary", "sup", "table", "tbody", "td", "tfoot", "th", "thead", "tr",
+    "u", "ul",
+})
+#: code highlighting's classes (pygments' short token names, ``highlight hl-python``) only: a
+#: class of the Formgrader's own style sheet could pin an answer over the marking form
+_CLASS_TAGS = frozenset({"code", "div", "pre", "span"})
+_HIGHLIGHT_CLASSES = re.compile(r"^(highlight|hl-[\w-]+|language-[\w-]+|[a-z]{1,3}\d?)"
+                                r"( (highlight|hl-[\w-]+|language-[\w-]+|[a-z]{1,3}\d?))*$")
+_ATTRIBUTES = {
+    "a": {"href", "title"},
+    "img": {"src", "alt", "title", "width", "height"},
+    "td": {"align", "colspan", "rowspan"}, "th": {"align", "colspan", "rowspan"},
+    "ol": {"start"},
+}
+#: a picture pasted into an answer (an attachment) arrives as one of these data URLs
+_RASTER_DATA_URL = re.compile(r"^data:image/(png|jpeg|gif|webp);base64,[A-Za-z0-9+/=\s]*$")
+_PROTOCOLS = frozenset({"http", "https", "mailto", "data"})
+
+
+def _allowed_attribute(tag: str, name: str, value: str) -> bool:
+    if name == "class":
+        return tag in _CLASS_TAGS and bool(_HIGHLIGHT_CLASSES.match(value))
+    if name == "title":
+        return True
+    if name not in _ATTRIBUTES.get(tag, ()):
+        return False
+    if tag == "img" and name == "src" and value.strip().lower().startswith("data:"):
+        return bool(_RASTER_DATA_URL.match(value.strip()))
+    if tag == "a" and name == "href" and value.strip().lower().startswith("data:"):
+        return False
+    return True
+
+
+def clean_html(html: str) -> str:
+    """``html`` with only :data:`ALLOWED_TAGS`, harmless attributes and safe URLs; every other
+    tag is escaped (shown as text), comments are dropped.
+
+    Examples
+    --------
+    >>> clean_html('<p>ok <img src=x onerror="alert(1)"> <script>alert(2)</script></p>')
+    '<p>ok <img src="x"> &lt;script&gt;alert(2)&lt;/script&gt;</p>'
+    """
+    if not isinstance(html, str):
+        raise ValueError(f"html must be a str, got {type(html).__name__}")
+    return bleach.clean(html, tags=ALLOWED_TAGS, attributes=_allowed_attribute,
+                        protocols=_PROTOCOLS, strip=False, strip_comments=True)
+
+
+@pass_context
+def markdown2html(context, source: str) -> str:
+    """The Formgrader's ``markdown2html`` filter, sanitised: nbconvert's rendering of
+    ``source`` (the cell's attachments resolved as nbconvert does), then :func:`clean_html`."""
+    from nbconvert.filters.markdown_mistune import IPythonRenderer, MarkdownWithMath
+
+    cell = context.get("cell", {}) or {}
+    renderer = IPythonRenderer(escape=False, allow_harmful_protocols=False,
+                               attachments=cell.get("attachments", {}) or {},
+                               anchor_link_text="", exclude_anchor_links=True)
+    return clean_html(MarkdownWithMath(renderer=renderer).render(source))
+
+
+def quoted_raw_cell(cell: dict) -> dict:
+    """A student's raw cell as a markdown cell that shows its text in a code block (never
+    rendered as HTML, whatever its ``raw_mimetype``)."""
+    source = cell.get("source", "")
+    source = "".join(source) if isinstance(source, list) else str(source)
+    fence = "`" * max(3, 1 + max((len(run) for run in re.findall(r"`+", source)), default=0))
+    return {"cell_type": "markdown", "metadata": {},
+            "source": f"*(a raw cell)*\n\n{fence}text\n{source}\n{fence}\n"}
