@@ -128,6 +128,8 @@ class PrivateExchangeCollect(ExchangeCollect):
       student's previous valid submission, if any, is collected instead;
     - the latest submission is the one the exchange saw last (the newest ``ctime`` in it), and
       the copy's ``timestamp.txt`` is that time (UTC), never the student's own file or name.
+
+    The owner check is always on (``ExchangeCollect.check_owner`` is not consulted).
     """
 
     def _path_to_record(self, path):
@@ -136,15 +138,17 @@ class PrivateExchangeCollect(ExchangeCollect):
         name = os.path.basename(path)
         student = name.rsplit("+", 3)[0]
         try:
-            owner = os.lstat(path).st_uid
+            top = os.lstat(path)
             uid = pwd.getpwnam(student).pw_uid
         except (OSError, KeyError):
-            owner, uid = None, None
-        if uid is None or owner != uid:
+            top, uid = None, None
+        if uid is None or top.st_uid != uid:
             self.log.warning("Skipped %s: it claims to be %s's submission but is owned by %s",
-                             path, student, "nobody known" if owner is None else _user_name(owner))
+                             path, student, "nobody known" if top is None else _user_name(top.st_uid))
             return None
         try:
+            if not stat.S_ISDIR(top.st_mode):
+                raise SubmissionRefused(f"{path} is not a folder")
             ctime_ns = newest_ctime_ns(path, uid)
         except SubmissionRefused as why:
             self._log_refusal(path, student, why)
