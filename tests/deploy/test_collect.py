@@ -12,7 +12,9 @@ ACL), then the real ``nbgrader collect`` with the deployment's collect class
   work, and a hard link to a classmate's file: refused, the attacker's earlier valid submission
   collected instead;
 - §4: a backdated ``timestamp.txt`` and a 2099 folder name: the submission collected is the one
-  the exchange saw last, stamped with when it was written.
+  the exchange saw last, stamped with when it was written;
+- and a submission written to while it is being copied is refused (a collect class that writes
+  during its own copy stands in for the student).
 
 Oracles: each notebook's content is a marker the test wrote, and each true time is the test's
 own clock around the write. The collect runs as root (the instructors' Python lives under
@@ -131,13 +133,14 @@ def _submit(place, user: str, marker: str, *, claimed: str | None = None,
     return {"folder": folder, "before": before, "after": after}
 
 
-def _collect(place) -> str:
+def _collect(place, *options: str) -> str:
     """``nbgrader collect --update`` of the class, as the README's grader does; its log."""
     home = place["state"] / "root-home"
     home.mkdir(exist_ok=True)
     env = {"PATH": f"{Path(sys.executable).parent}:/usr/bin:/bin", "HOME": str(home),
-           "JUPYTER_CONFIG_DIR": str(home), "PYTHONPATH": str(hub.DEPLOY), "LANG": "C.UTF-8"}
-    proc = subprocess.run([sys.executable, "-m", "nbgrader", "collect", "--update", A],
+           "JUPYTER_CONFIG_DIR": str(home), "PYTHONPATH": f"{hub.DEPLOY}:{home}",
+           "LANG": "C.UTF-8"}
+    proc = subprocess.run([sys.executable, "-m", "nbgrader", "collect", "--update", *options, A],
                           cwd=place["course"], env=env, capture_output=True, text=True,
                           timeout=300)
     assert proc.returncode == 0, proc.stderr[-3000:]
@@ -243,3 +246,33 @@ def test_the_time_is_the_exchanges_not_the_students(place):
     _assert_true_time(place, EVE, eve_last)
     assert _content(place, HONEST) == "honest work"
     _assert_true_time(place, HONEST, honest)
+
+
+#: a collect that appends to the submission it is copying (as a student writing at that moment)
+RACY_COLLECT = """
+import private_exchange
+
+
+class RacyCollect(private_exchange.PrivateExchangeCollect):
+    def do_copy(self, src, dest, log=None):
+        super().do_copy(src, dest, log)
+        if "+{stamp}+" in src:
+            with open(src + "/{notebook}", "a") as fh:
+                fh.write(" and more")
+"""
+
+
+def test_a_submission_changed_while_copied_is_refused(place):
+    """A write into the submission during its copy (its ``ctime`` moves): refused, and the
+    student's previous submission, with its own time, collected instead."""
+    first = _submit(place, HONEST, "first")
+    time.sleep(1.1)
+    late_stamp = "2026-12-02 00:00:00.000000 UTC"
+    second = _submit(place, HONEST, "second", stamp=late_stamp)
+    (place["state"] / "root-home").mkdir()
+    (place["state"] / "root-home" / "racy_collect.py").write_text(
+        RACY_COLLECT.format(stamp=late_stamp, notebook=NB))
+    log = _collect(place, "--ExchangeFactory.collect=racy_collect.RacyCollect")
+    _log_line(log, second["folder"], "Refused", HONEST, "changed while being collected")
+    assert _content(place, HONEST) == "first"
+    _assert_true_time(place, HONEST, first)
