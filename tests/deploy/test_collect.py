@@ -2,9 +2,12 @@
 
 The red team's attacks (``findings7`` §2–4), each made by a real Unix user as their own uid
 (``runuser``) in an exchange prepared by ``deploy/hub.py`` itself (inbound 3733 and its default
-ACL), then the real ``nbgrader collect`` with the deployment's collect class
-(``deploy/private_exchange.py``; ``COLLECT_CLASS_UNDER_TEST`` names another, e.g. nbgrader's own
-``nbgrader.exchange.default.collect.ExchangeCollect``, which fails every test here):
+ACL), then the real ``nbgrader collect`` as the hub runs it: as the grader account, in the
+instructors' environment ``deploy/hub.py`` builds (cached in ``test-artifacts/deploy/envs/``, shared
+with the hub test), with the Jupyter config it writes, which names the deployment's collect class
+(``deploy/private_exchange.py``). ``COLLECT_CLASS_UNDER_TEST`` names another on the command line,
+e.g. nbgrader's own ``nbgrader.exchange.default.collect.ExchangeCollect``: every attack test
+here fails with it.
 
 - §2: a student makes a folder named for a classmate (2099 in its name); the classmate's own
   work must be collected, the impostor's folder skipped, and nobody may rename another's folder;
@@ -17,9 +20,8 @@ ACL), then the real ``nbgrader collect`` with the deployment's collect class
   during its own copy stands in for the student).
 
 Oracles: each notebook's content is a marker the test wrote, and each true time is the test's
-own clock around the write. The collect runs as root (the instructors' Python lives under
-``/root``, which the grader account cannot run): a stronger reader than the grader account, so
-every link is as dangerous as on the hub. Skipped when not root or without ``useradd``/``setfacl``.
+own clock around the write. Skipped when not root, or without ``useradd``, ``setfacl`` or
+Debian's ``python3-venv``.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ import time
 from pathlib import Path
 
 import pytest
+from hubtools import ENVS
 
 import hub  # deploy/hub.py (hubtools, imported by conftest, puts deploy/ on sys.path)
 
@@ -44,7 +47,8 @@ PREFIX = "t4c8"
 VICTIM, MALLORY, EVE, HONEST = (f"{PREFIX}{n}" for n in ("vic", "mal", "eve", "hon"))
 STUDENTS = (VICTIM, MALLORY, EVE, HONEST)
 GRADER, INSTRUCTORS, STUDENTS_GROUP = f"{PREFIX}grader", f"{PREFIX}-inst", f"{PREFIX}-stud"
-COLLECT = os.environ.get("COLLECT_CLASS_UNDER_TEST", "private_exchange.PrivateExchangeCollect")
+#: ``--ExchangeFactory.collect=...``: another collect than the deployment's (see above)
+COLLECT = os.environ.get("COLLECT_CLASS_UNDER_TEST")
 #: how far a collected time may sit outside the test's clock around the write (ctime is coarse)
 SLACK = datetime.timedelta(seconds=1)
 NOW_STAMP = "%Y-%m-%d %H:%M:%S.%f UTC"
@@ -56,6 +60,9 @@ def _skip_reason() -> str | None:
     for tool in ("/usr/sbin/useradd", "/usr/bin/setfacl", "/usr/sbin/runuser"):
         if not Path(tool).exists():
             return f"{tool} is missing (`make hub-deps` installs it)"
+    if subprocess.run([hub.SYSTEM_PYTHON, "-c", "import ensurepip, venv"],
+                      capture_output=True).returncode != 0:
+        return "Debian's python3-venv is missing (`make hub-deps` installs it)"
     return None
 
 
@@ -68,6 +75,7 @@ def _remove_accounts() -> None:
 
 @pytest.fixture(scope="module")
 def accounts():
+    """The accounts, and the instructors' environment (with ``private_exchange`` installed)."""
     reason = _skip_reason()
     if reason:
         pytest.skip(reason)
@@ -76,6 +84,7 @@ def accounts():
         hub.ensure_user(GRADER, [INSTRUCTORS])
         for name in STUDENTS:
             hub.ensure_user(name, [STUDENTS_GROUP])
+        hub.build_instructor_env(ENVS / "instructor", INSTRUCTORS)
         yield
     finally:
         _remove_accounts()
@@ -83,29 +92,29 @@ def accounts():
 
 @pytest.fixture
 def place(accounts):
-    """A fresh exchange (as ``deploy/hub.py`` makes it), a course folder (root's, 0700, as the
-    grader's is) and a folder anyone may write in (``/tmp``'s modes, same filesystem)."""
+    """A fresh exchange and Jupyter config (as ``deploy/hub.py`` makes them), the grader's
+    course folder (0700) and a folder anyone may write in (``/tmp``'s modes, same filesystem)."""
     state = Path(tempfile.mkdtemp(prefix="4f9-collect-", dir="/tmp"))
     os.chmod(state, 0o755)
     settings = hub.HubSettings(state=str(state), course_id=COURSE, grader=GRADER,
-                               students_group=STUDENTS_GROUP, instructors_group=INSTRUCTORS)
+                               students_group=STUDENTS_GROUP, instructors_group=INSTRUCTORS,
+                               envs=str(ENVS))
+    hub.write_jupyter_configs(settings)
     hub.prepare_exchange(settings)
     inbound = hub.prepare_inbound(settings)
-    course = state / "course"
+    course = Path(settings.paths["course_dir"])
     (course / "source" / A).mkdir(parents=True)
+    for folder in (course, course / "source", course / "source" / A):
+        shutil.chown(folder, GRADER, GRADER)
     os.chmod(course, 0o700)
-    (course / "nbgrader_config.py").write_text("\n".join([
-        "c = get_config()  # noqa: F821", f"c.CourseDirectory.course_id = {COURSE!r}",
-        f"c.CourseDirectory.root = {str(course)!r}",
-        f"c.Exchange.root = {settings.paths['exchange']!r}",
-        f"c.ExchangeFactory.collect = {COLLECT!r}"]) + "\n")
     public = state / "public"
     public.mkdir()
     os.chmod(public, 0o1777)
     try:
-        yield {"inbound": inbound, "course": course, "public": public, "state": state}
+        yield {"inbound": inbound, "course": course, "public": public, "settings": settings}
     finally:
         shutil.rmtree(state, ignore_errors=True)
+        shutil.rmtree(course, ignore_errors=True)
 
 
 def _as(user: str, script: str, **env) -> subprocess.CompletedProcess:
@@ -133,16 +142,21 @@ def _submit(place, user: str, marker: str, *, claimed: str | None = None,
     return {"folder": folder, "before": before, "after": after}
 
 
+def _as_grader_file(path: Path, text: str) -> None:
+    path.write_text(text)
+    shutil.chown(path, GRADER, GRADER)
+
+
 def _collect(place, *options: str) -> str:
-    """``nbgrader collect --update`` of the class, as the README's grader does; its log."""
-    home = place["state"] / "root-home"
-    home.mkdir(exist_ok=True)
-    env = {"PATH": f"{Path(sys.executable).parent}:/usr/bin:/bin", "HOME": str(home),
-           "JUPYTER_CONFIG_DIR": str(home), "PYTHONPATH": f"{hub.DEPLOY}:{home}",
-           "LANG": "C.UTF-8"}
-    proc = subprocess.run([sys.executable, "-m", "nbgrader", "collect", "--update", *options, A],
-                          cwd=place["course"], env=env, capture_output=True, text=True,
-                          timeout=300)
+    """``nbgrader collect --update`` of the class, as the README's grader does; its log.
+    (``PYTHONPATH``: the grader's home, for a collect class a test puts there.)"""
+    settings = place["settings"]
+    if COLLECT and not any(o.startswith("--ExchangeFactory.collect=") for o in options):
+        options = (f"--ExchangeFactory.collect={COLLECT}", *options)
+    env = {**hub.grader_env(settings), "PYTHONPATH": hub.home_of(GRADER)}
+    python = Path(settings.paths["instructor_env"]) / "bin" / "python"
+    proc = hub.as_user(GRADER, [python, "-m", "nbgrader", "collect", "--update", *options, A],
+                       env=env, cwd=str(place["course"]), timeout=300)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return proc.stderr
 
@@ -196,7 +210,7 @@ def test_symbolic_links_are_refused_and_the_previous_submission_collected(place)
     victim = _submit(place, VICTIM, "victim's own work")
     _collect(place)
     model = place["course"] / "source" / A / NB
-    model.write_text("model answers")
+    _as_grader_file(model, "model answers")
     eve_before = _submit(place, EVE, "eve's own earlier work")
     time.sleep(1.1)  # the two of Eve's submissions a clear second apart
     to_model = _submit(place, MALLORY, "", link=str(model))
@@ -269,9 +283,10 @@ def test_a_submission_changed_while_copied_is_refused(place):
     time.sleep(1.1)
     late_stamp = "2026-12-02 00:00:00.000000 UTC"
     second = _submit(place, HONEST, "second", stamp=late_stamp)
-    (place["state"] / "root-home").mkdir()
-    (place["state"] / "root-home" / "racy_collect.py").write_text(
-        RACY_COLLECT.format(stamp=late_stamp, notebook=NB))
+    opened = _as(HONEST, 'chmod 660 "$F"', F=second["folder"] / NB)  # the grader may write it
+    assert opened.returncode == 0, opened.stderr
+    _as_grader_file(Path(hub.home_of(GRADER)) / "racy_collect.py",
+                    RACY_COLLECT.format(stamp=late_stamp, notebook=NB))
     log = _collect(place, "--ExchangeFactory.collect=racy_collect.RacyCollect")
     _log_line(log, second["folder"], "Refused", HONEST, "changed while being collected")
     assert _content(place, HONEST) == "first"
