@@ -89,7 +89,7 @@ def _user_name(uid: int) -> str:
 def newest_ctime_ns(folder: str, uid: int) -> int:
     """The newest ``st_ctime_ns`` over ``folder`` and everything in it, none of it followed.
 
-    ``ctime`` is set by the kernel whenever a file's content, name count or mode changes; no
+    ``ctime`` is set by the kernel whenever a file's content, link count or mode changes; no
     user can set it back (unlike ``mtime``, ``touch -d``), so it is when the exchange last saw
     the submission change. Raises :class:`SubmissionRefused` on a symbolic link, a hard-linked
     file, anything not a regular file or folder, anything not owned by ``uid``, or anything the
@@ -114,7 +114,8 @@ def newest_ctime_ns(folder: str, uid: int) -> int:
 
 def utc_stamp(ctime_ns: int, timestamp_format: str) -> str:
     """``ctime_ns`` (nanoseconds since the epoch) in nbgrader's ``timestamp_format``, in UTC."""
-    moment = datetime.datetime.fromtimestamp(ctime_ns / 1e9, datetime.timezone.utc)
+    epoch = datetime.datetime(1970, 1, 1, tzinfo=datetime.timezone.utc)
+    moment = epoch + datetime.timedelta(microseconds=ctime_ns // 1000)  # exact, no float
     return moment.strftime(timestamp_format)
 
 
@@ -140,11 +141,15 @@ class PrivateExchangeCollect(ExchangeCollect):
         try:
             top = os.lstat(path)
             uid = pwd.getpwnam(student).pw_uid
-        except (OSError, KeyError):
-            top, uid = None, None
-        if uid is None or top.st_uid != uid:
+        except KeyError:
+            self.log.warning("Skipped %s: %r, the student it names, is no Unix user", path, student)
+            return None
+        except OSError as err:
+            self.log.warning("Skipped %s: %s", path, err)
+            return None
+        if top.st_uid != uid:
             self.log.warning("Skipped %s: it claims to be %s's submission but is owned by %s",
-                             path, student, "nobody known" if top is None else _user_name(top.st_uid))
+                             path, student, _user_name(top.st_uid))
             return None
         try:
             if not stat.S_ISDIR(top.st_mode):
