@@ -12,12 +12,15 @@ What ``up`` builds, under the state folder (default ``/srv/4f9-hub``, owned by r
   the students' compiled wheel alone (``autograder.student_bundle``) plus ``jupyterhub`` (for
   ``jupyterhub-singleuser``) and :mod:`private_exchange`; every user's server runs in it;
 - ``envs/instructor``: the instructors' copy (this repository installed editable, with
-  ``jupyterhub``), readable by the instructors' group only; the hub and the formgrader use it;
+  ``jupyterhub`` and :mod:`private_exchange`), readable by the instructors' group only; the hub,
+  the formgrader and ``nbgrader collect`` use it;
 - ``etc/student``, ``etc/instructor``: the Jupyter config folders of the two (nbgrader's course
-  id and exchange, the private submit, the formgrader's ``frame-ancestors``);
+  id and exchange, the private submit, the collect that checks owners, links and times, the
+  formgrader's ``frame-ancestors``);
 - ``exchange/``: nbgrader's exchange, root-owned with the sticky bit (so no student can rename or
   remove the course's folder, nbgrader #1225), its ``inbound`` owned by the grader account,
-  readable by the instructors' group through a default ACL and by no student;
+  sticky (no student removes another's submission), readable by the instructors' group through a
+  default ACL and by no student;
 - ``hub/``: JupyterHub's database, cookie secret and proxy pid (root only, 0700);
 - ``hub.json``: the settings ``deploy/jupyterhub_config.py`` reads.
 
@@ -200,7 +203,8 @@ def _instructor_digest() -> str:
 
 
 def build_instructor_env(env_dir: Path, group: str) -> Path:
-    """The instructors' environment: this repository (editable) with ``jupyterhub``.
+    """The instructors' environment: this repository (editable) with ``jupyterhub`` and the
+    collect class (:mod:`private_exchange`).
 
     Readable by root and ``group`` only (0750): it can import the references and the grader.
     """
@@ -210,6 +214,7 @@ def build_instructor_env(env_dir: Path, group: str) -> Path:
     if not stamp.exists() or stamp.read_text() != _instructor_digest():
         _pip(env_dir, "-e", f"{REPO}[hub]")
         stamp.write_text(_instructor_digest())
+    shutil.copyfile(DEPLOY / "private_exchange.py", _site_packages(env_dir) / "private_exchange.py")
     _no_news(env_dir)
     shutil.chown(env_dir, "root", group)
     os.chmod(env_dir, 0o750)
@@ -234,7 +239,9 @@ def write_jupyter_configs(s: HubSettings) -> None:
         "# each submission readable by its author and the graders only (deploy/private_exchange.py)",
         "c.ExchangeFactory.submit = 'private_exchange.PrivateExchangeSubmit'"]))
     (instructor / "nbgrader_config.py").write_text(_nbgrader_config(s, [
-        f"c.CourseDirectory.root = {s.paths['course_dir']!r}"]))
+        f"c.CourseDirectory.root = {s.paths['course_dir']!r}",
+        "# only a student's own files, never a link, timed by the exchange (deploy/private_exchange.py)",
+        "c.ExchangeFactory.collect = 'private_exchange.PrivateExchangeCollect'"]))
     # JupyterHub >= 4.1 forbids framing by default; the formgrader is an iframe of the lab
     (instructor / "jupyter_server_config.py").write_text(
         "c = get_config()  # noqa: F821\n"
@@ -284,13 +291,23 @@ def prepare_course(s: HubSettings) -> None:
     python = Path(s.paths["instructor_env"]) / "bin" / "python"
     as_grader(s, [python, "-m", "autograder", "release", "--course-root", course])
     as_grader(s, [python, "-m", "nbgrader", "release_assignment", ASSIGNMENT, "--force"])
+    prepare_inbound(s)
+
+
+def prepare_inbound(s: HubSettings) -> Path:
+    """``exchange/<course>/inbound``: students may create a folder there, not list or remove
+    one; whatever is made in it the graders' group may read."""
     inbound = Path(s.paths["exchange"]) / s.course_id / "inbound"
+    inbound.mkdir(exist_ok=True)
     shutil.chown(inbound, s.grader, s.instructors_group)
-    os.chmod(inbound, 0o2733)  # drwx-wx-wx + setgid: submissions take the graders' group
+    # drwx-wx-wt + setgid: submissions take the graders' group; the sticky bit keeps anyone
+    # but a folder's owner (and the grader) from renaming or removing it
+    os.chmod(inbound, 0o3733)
     # ... but nbgrader writes timestamp.txt after copytree has reset the submission folder's
     # mode (setgid gone), so that file keeps the student's group: a default ACL gives the graders
     # every file and folder made in the inbound, whatever its group; nothing for "other"
     run(["setfacl", "-d", "-m", f"u::rwx,g::---,o::---,g:{s.instructors_group}:rwX", inbound])
+    return inbound
 
 
 def write_settings(s: HubSettings) -> Path:

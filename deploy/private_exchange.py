@@ -1,4 +1,4 @@
-"""nbgrader's filesystem exchange, with each submission readable by its author and the graders only.
+"""nbgrader's filesystem exchange: each submission private, and collected only as its author's.
 
 nbgrader's own ``ExchangeSubmit`` leaves every submission world-readable (files 0644, folder
 0777, in ``<exchange>/<course>/inbound/``; nbgrader issues #978 and #1225). The inbound folder
@@ -11,13 +11,31 @@ submission is the inbound folder's group, inherited through its setgid bit: the 
 (``deploy/hub.py``) gives the inbound to the graders' group, which no student is in. Installed
 in the students' environment by ``deploy/hub.py`` and switched on in their
 ``nbgrader_config.py`` with ``c.ExchangeFactory.submit = "private_exchange.PrivateExchangeSubmit"``.
+
+``PrivateExchangeCollect`` is the graders' side (the instructors' environment, named in their
+``nbgrader_config.py`` as ``c.ExchangeFactory.collect``). nbgrader's own collect believes the
+inbound: a folder named ``<classmate>+...`` by another student is collected as the classmate's
+(nbgrader only warns, "cheating attempt?"), ``copytree`` follows a submitted symbolic link as the
+grader account (the course's source notebooks, a classmate's collected work), and the
+submission's time is the student's ``timestamp.txt`` and folder name, so a late submission can be
+backdated and a classmate's buried under a 2099 one. This class trusts only what the kernel
+records: who owns each file (``lstat``) and when it last changed (``ctime``).
 """
 
 from __future__ import annotations
 
+import datetime
+import glob
 import os
+import pwd
+import shutil
+import stat
+import tempfile
 
+from nbgrader.api import Gradebook, MissingEntry
+from nbgrader.exchange.default.collect import ExchangeCollect, groupby
 from nbgrader.exchange.default.submit import ExchangeSubmit
+from nbgrader.utils import check_mode, ignore_patterns, parse_utc
 
 #: permission bits a submission never gets: nothing for "other"
 OTHERS = 0o007
@@ -36,3 +54,216 @@ class PrivateExchangeSubmit(ExchangeSubmit):
         """Submit as nbgrader does, then close the folder nbgrader leaves at 0777."""
         super().copy_files()
         os.chmod(os.path.join(self.inbound_path, self.assignment_filename), SUBMISSION_DIR_MODE)
+
+
+# --- collect --------------------------------------------------------------------------------------
+
+#: the name of nbgrader's timestamp file, in a submission and in its collected copy
+TIMESTAMP_FILE = "timestamp.txt"
+
+
+class SubmissionRefused(Exception):
+    """A submission holding something the grader must not follow or copy (the reason)."""
+
+
+def _refusal(path: str, st: os.stat_result, uid: int) -> str | None:
+    """Why ``path`` (its ``lstat`` is ``st``) may not be part of a submission by ``uid``."""
+    if stat.S_ISLNK(st.st_mode):
+        return f"{path} is a symbolic link"
+    if not (stat.S_ISREG(st.st_mode) or stat.S_ISDIR(st.st_mode)):
+        return f"{path} is not a regular file or folder"
+    if st.st_uid != uid:
+        return f"{path} is owned by {_user_name(st.st_uid)}, not by the student"
+    if stat.S_ISREG(st.st_mode) and st.st_nlink > 1:
+        return f"{path} is a hard link ({st.st_nlink} names)"
+    return None
+
+
+def _user_name(uid: int) -> str:
+    try:
+        return pwd.getpwuid(uid).pw_name
+    except KeyError:
+        return f"uid {uid}"
+
+
+def newest_ctime_ns(folder: str, uid: int) -> int:
+    """The newest ``st_ctime_ns`` over ``folder`` and everything in it, none of it followed.
+
+    ``ctime`` is set by the kernel whenever a file's content, link count or mode changes; no
+    user can set it back (unlike ``mtime``, ``touch -d``), so it is when the exchange last saw
+    the submission change. Raises :class:`SubmissionRefused` on a symbolic link, a hard-linked
+    file, anything not a regular file or folder, anything not owned by ``uid``, or anything the
+    collecting account cannot read.
+    """
+    newest, pending = 0, [folder]
+    try:
+        while pending:
+            path = pending.pop()
+            st = os.lstat(path)
+            reason = _refusal(path, st, uid)
+            if reason:
+                raise SubmissionRefused(reason)
+            newest = max(newest, st.st_ctime_ns)
+            if stat.S_ISDIR(st.st_mode):
+                with os.scandir(path) as entries:
+                    pending.extend(entry.path for entry in entries)
+    except OSError as err:
+        raise SubmissionRefused(f"cannot be read by the collecting account: {err}") from err
+    return newest
+
+
+def utc_stamp(ctime_ns: int, timestamp_format: str) -> str:
+    """``ctime_ns`` (nanoseconds since the epoch) in nbgrader's ``timestamp_format``, in UTC."""
+    epoch = datetime.datetime(1970, 1, 1, tzinfo=datetime.timezone.utc)
+    moment = epoch + datetime.timedelta(microseconds=ctime_ns // 1000)  # exact, no float
+    return moment.strftime(timestamp_format)
+
+
+class PrivateExchangeCollect(ExchangeCollect):
+    """``nbgrader collect`` that believes nothing a student wrote into the inbound.
+
+    - a folder counts only if its owner is the Unix user it names (on the hub the student id is
+      the login); others are skipped and logged;
+    - a submission holding a symbolic link, a hard-linked file, anything but regular files and
+      folders, or anything not owned by the student is refused whole and logged, so the
+      student's previous valid submission, if any, is collected instead;
+    - the latest submission is the one the exchange saw last (the newest ``ctime`` in it), and
+      the copy's ``timestamp.txt`` is that time (UTC), never the student's own file or name.
+
+    The owner check is always on (``ExchangeCollect.check_owner`` is not consulted).
+    """
+
+    def _path_to_record(self, path):
+        """The record of the folder ``path``, timed by its ``ctime``; ``None`` when it does not
+        count (logged)."""
+        name = os.path.basename(path)
+        student = name.rsplit("+", 3)[0]
+        try:
+            top = os.lstat(path)
+            uid = pwd.getpwnam(student).pw_uid
+        except KeyError:
+            self.log.warning("Skipped %s: %r, the student it names, is no Unix user", path, student)
+            return None
+        except OSError as err:
+            self.log.warning("Skipped %s: %s", path, err)
+            return None
+        if top.st_uid != uid:
+            self.log.warning("Skipped %s: it claims to be %s's submission but is owned by %s",
+                             path, student, _user_name(top.st_uid))
+            return None
+        try:
+            if not stat.S_ISDIR(top.st_mode):
+                raise SubmissionRefused(f"{path} is not a folder")
+            ctime_ns = newest_ctime_ns(path, uid)
+        except SubmissionRefused as why:
+            self._log_refusal(path, student, why)
+            return None
+        stamp = utc_stamp(ctime_ns, self.timestamp_format)
+        return {"username": student, "filename": name, "timestamp": parse_utc(stamp),
+                "stamp": stamp, "ctime_ns": ctime_ns, "uid": uid}
+
+    def _log_refusal(self, path, student, why):
+        self.log.warning("Refused %s, %s's submission: %s (nothing of it collected)",
+                         path, student, why)
+
+    def init_src(self):
+        """Every submission that counts, by student (nbgrader's checks of the course first)."""
+        if self.coursedir.course_id == "":
+            self.fail("No course id specified. Re-run with --course flag.")
+        self.course_path = os.path.join(self.root, self.coursedir.course_id)
+        self.inbound_path = os.path.join(self.course_path, "inbound")
+        if not os.path.isdir(self.inbound_path):
+            self.fail(f"Course not found: {self.inbound_path}")
+        if not check_mode(self.inbound_path, read=True, execute=True):
+            self.fail(f"You don't have read permissions for the directory: {self.inbound_path}")
+        student_id = self.coursedir.student_id or "*"
+        pattern = os.path.join(self.inbound_path, f"{student_id}+{self.coursedir.assignment_id}+*")
+        records = [r for r in map(self._path_to_record, sorted(glob.glob(pattern))) if r]
+        self.by_student = groupby(records, lambda record: record["username"])
+        with Gradebook(self.coursedir.db_url, self.coursedir.course_id) as gb:
+            try:
+                self.duedate = gb.find_assignment(self.coursedir.assignment_id).duedate
+            except MissingEntry:
+                self.duedate = None
+        self.src_records = [self._preferred(v)[0] for v in self.by_student.values()]
+
+    def _preferred(self, records):
+        """``records`` newest first; with ``--before-duedate``, those on time first."""
+        newest_first = self._sort_by_timestamp(records)
+        if self.duedate is None or not self.before_duedate:
+            return newest_first
+        on_time = [r for r in newest_first if r["timestamp"] <= self.duedate]
+        return on_time + [r for r in newest_first if r["timestamp"] > self.duedate]
+
+    def copy_files(self):
+        """Each student's preferred submission that survives its copy (see :meth:`_collect`)."""
+        if not self.by_student:
+            self.log.warning("No submissions of '%s' for course '%s' to collect",
+                             self.coursedir.assignment_id, self.coursedir.course_id)
+            return
+        self.log.info("Processing %d submissions of '%s' for course '%s'", len(self.by_student),
+                      self.coursedir.assignment_id, self.coursedir.course_id)
+        for records in self.by_student.values():
+            for record in self._preferred(records):
+                if self._collect(record):
+                    break
+
+    def _wanted(self, record, dest):
+        """nbgrader's rule: is ``record`` to replace what ``dest`` holds (``--update``,
+        ``--before-duedate``)?"""
+        if not os.path.isdir(dest):
+            return True
+        existing = self.coursedir.get_existing_timestamp(dest)
+        if self.update and (existing is None or record["timestamp"] > existing):
+            return True
+        if self.before_duedate and existing != record["timestamp"]:
+            return True
+        advice = "No newer submission to collect" if self.update else \
+            "Submission already exists, use --update to update"
+        self.log.info("%s: %s %s", advice, record["username"], self.coursedir.assignment_id)
+        return False
+
+    def _collect(self, record) -> bool:
+        """Copy ``record`` into the course (``False``: refused, nothing changed)."""
+        student, assignment = record["username"], self.coursedir.assignment_id
+        dest = self.coursedir.format_path(self.coursedir.submitted_directory, student, assignment)
+        if not self._wanted(record, dest):
+            return True
+        os.makedirs(os.path.dirname(dest), exist_ok=True)
+        staging = tempfile.mkdtemp(prefix=".collecting-", dir=os.path.dirname(dest))
+        copy = os.path.join(staging, assignment)
+        src = os.path.join(self.inbound_path, record["filename"])
+        try:
+            self.do_copy(src, copy)
+            after = newest_ctime_ns(src, record["uid"])
+            if after != record["ctime_ns"]:
+                raise SubmissionRefused("it changed while being collected")
+        except (SubmissionRefused, shutil.Error, OSError) as why:
+            shutil.rmtree(staging)
+            self._log_refusal(src, student, why)
+            return False
+        with open(os.path.join(copy, TIMESTAMP_FILE), "w") as fh:
+            fh.write(record["stamp"])
+        if os.path.isdir(dest):
+            self.log.info("Updating submission: %s %s", student, assignment)
+            shutil.rmtree(dest)
+        else:
+            self.log.info("Collecting submission: %s %s", student, assignment)
+        os.rename(copy, dest)
+        os.rmdir(staging)
+        return True
+
+    def do_copy(self, src, dest, log=None):
+        """nbgrader's copy (size limit, ignore/include globs) with links copied as links, never
+        followed, and without the student's ``timestamp.txt``."""
+        if self.get_size(src) > 1000 * self.coursedir.max_dir_size:
+            raise SubmissionRefused(f"it is larger than {self.coursedir.max_dir_size} kB")
+        nbgrader_ignore = ignore_patterns(exclude=self.coursedir.ignore,
+                                          include=self.coursedir.include,
+                                          max_file_size=self.coursedir.max_file_size, log=self.log)
+
+        def ignore(folder, names):
+            ignored = nbgrader_ignore(folder, names)
+            return [*ignored, TIMESTAMP_FILE] if folder == src else ignored
+
+        shutil.copytree(src, dest, symlinks=True, ignore=ignore)
