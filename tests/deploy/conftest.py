@@ -18,7 +18,6 @@ import os
 import secrets
 import shutil
 import subprocess
-import sys
 import tempfile
 import time
 import urllib.request
@@ -26,23 +25,18 @@ from pathlib import Path
 
 import pytest
 
-from hubtools import ARTIFACTS, CHROMIUM, ENVS, GRADER, INSTRUCTOR, PREFIX, STUDENTS
+from hubtools import (ARTIFACTS, CHROMIUM, ENVS, GRADER, INSTRUCTOR, PREFIX, STUDENTS,
+                      missing_for_accounts)
 
 import hub  # deploy/hub.py (hubtools puts deploy/ on sys.path)
 
 
 def _skip_reason() -> str | None:
-    if sys.platform != "linux" or os.geteuid() != 0:
-        return "the hub test creates Unix users and runs a setuid spawner: run it as root"
-    for tool, package in (("/usr/bin/configurable-http-proxy", "node-configurable-http-proxy"),
-                          (str(CHROMIUM), "chromium"), ("/usr/sbin/useradd", "passwd"),
-                          ("/usr/bin/setfacl", "acl")):
-        if not Path(tool).exists():
-            return f"{tool} is missing (Debian package {package}; `make hub-deps` installs it)"
-    if subprocess.run([hub.SYSTEM_PYTHON, "-c", "import ensurepip, venv"],
-                      capture_output=True).returncode != 0:
-        return "Debian's python3-venv is missing (`make hub-deps` installs it)"
-    return None
+    return missing_for_accounts(
+        "the hub test creates Unix users and runs a setuid spawner",
+        (("/usr/bin/configurable-http-proxy", "node-configurable-http-proxy"),
+         (str(CHROMIUM), "chromium"), ("/usr/sbin/useradd", "passwd"),
+         ("/usr/bin/setfacl", "acl")))
 
 
 def _remove_account(name: str) -> None:

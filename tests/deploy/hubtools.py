@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -19,3 +20,19 @@ PREFIX = "t4f9"
 STUDENTS = (f"{PREFIX}ana", f"{PREFIX}ben")
 INSTRUCTOR = f"{PREFIX}prof"
 GRADER = f"{PREFIX}grader"
+
+
+def missing_for_accounts(what: str, tools: tuple[tuple[str, str], ...]) -> str | None:
+    """Why a test that makes Unix users cannot run here (``what`` it does, the ``(tool path,
+    Debian package)`` it needs), or ``None``."""
+    import hub  # deploy/hub.py
+
+    if sys.platform != "linux" or os.geteuid() != 0:
+        return f"{what}: run it as root"
+    for tool, package in tools:
+        if not Path(tool).exists():
+            return f"{tool} is missing (Debian package {package}; `make hub-deps` installs it)"
+    if subprocess.run([hub.SYSTEM_PYTHON, "-c", "import ensurepip, venv"],
+                      capture_output=True).returncode != 0:
+        return "Debian's python3-venv is missing (`make hub-deps` installs it)"
+    return None

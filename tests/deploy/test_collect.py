@@ -30,13 +30,12 @@ import datetime
 import os
 import shutil
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import pytest
-from hubtools import ENVS
+from hubtools import ENVS, missing_for_accounts
 
 import hub  # deploy/hub.py (hubtools, imported by conftest, puts deploy/ on sys.path)
 
@@ -55,15 +54,9 @@ NOW_STAMP = "%Y-%m-%d %H:%M:%S.%f UTC"
 
 
 def _skip_reason() -> str | None:
-    if sys.platform != "linux" or os.geteuid() != 0:
-        return "the collect test creates Unix users: run it as root"
-    for tool in ("/usr/sbin/useradd", "/usr/bin/setfacl", "/usr/sbin/runuser"):
-        if not Path(tool).exists():
-            return f"{tool} is missing (`make hub-deps` installs it)"
-    if subprocess.run([hub.SYSTEM_PYTHON, "-c", "import ensurepip, venv"],
-                      capture_output=True).returncode != 0:
-        return "Debian's python3-venv is missing (`make hub-deps` installs it)"
-    return None
+    return missing_for_accounts("the collect test creates Unix users",
+                                (("/usr/sbin/useradd", "passwd"), ("/usr/bin/setfacl", "acl"),
+                                 ("/usr/sbin/runuser", "util-linux")))
 
 
 def _remove_accounts() -> None:
