@@ -13,8 +13,10 @@ nbgrader stays the instructors' workflow: formgrader reads the gradebook for the
   locked text) restored from the source by ``grade_id`` (hidden tests removed, so even nbgrader's
   own ``generate_feedback`` cannot leak them), duplicates demoted to plain cells, cells whose
   metadata was stripped re-tagged, missing cells re-inserted, outputs cleared, and each test cell
-  carrying the grader's verdict as its output; a student's raw cell becomes a markdown cell
-  quoting it (the Formgrader would show a raw cell's HTML as is: see ``safe_markdown``).
+  carrying the grader's verdict as its output; a student's raw cell (or one of a type nbformat
+  does not know) becomes a markdown cell quoting it (the Formgrader would show a raw cell's HTML
+  as is: see ``safe_markdown``), and grading metadata on a cell the course does not know is
+  dropped.
 
 The course root is the folder holding ``SUBMITTED`` when that is an nbgrader course
 (``<root>/submitted`` next to ``<root>/source/tripos2006``), otherwise ``OUT``; the gradebook is
@@ -36,7 +38,7 @@ from pathlib import Path
 
 from ..course import default_db_url
 from ..model import ASSIGNMENT, Batch, CellKind, CellResult, SourceNotebook, Status, Submission
-from .safe_markdown import quoted_raw_cell
+from .safe_markdown import quoted_cell
 
 COURSE_ID = "4f9"
 #: Files of a submission folder the autograded folder keeps: nbgrader's ``release_feedback``
@@ -323,10 +325,13 @@ def _merge(src: SourceNotebook, sub: Submission) -> list[dict]:
     present: set[str] = set()
     for k, c in enumerate(sub.cells):
         cell = _clean(c["raw"])
+        # the student's grading metadata is never kept: a cell matched to the course's gets the
+        # source's below (a dict grade_id broke the writer; a null one drew a fake answer panel)
+        cell["metadata"].pop("nbgrader", None)
         gid = c["grade_id"]
         scell = src.cell(gid) if gid else None
         if gid and last[gid] != k:
-            cell["metadata"].pop("nbgrader", None)       # an earlier duplicate: a plain cell
+            pass                                         # an earlier duplicate: a plain cell
         elif scell is not None and _is_trusted(scell.meta):
             cell = _clean(_source_cell_json(src, scell.index))
             if cell["cell_type"] == "code":
@@ -340,15 +345,13 @@ def _merge(src: SourceNotebook, sub: Submission) -> list[dict]:
                 cell.pop("outputs", None)
                 cell.pop("execution_count", None)
             present.add(gid)
-        elif gid:
-            cell["metadata"].pop("nbgrader", None)       # a grade_id the course does not know
-        elif k in by_name:
+        elif k in by_name and not gid:
             meta = src.cell(by_name[k])
             if meta is not None:
                 cell["metadata"]["nbgrader"] = copy.deepcopy(meta.meta)
                 present.add(by_name[k])
-        if cell.get("cell_type") == "raw":      # the course has none: a student's, never HTML
-            cell = quoted_raw_cell(cell)
+        if cell.get("cell_type") not in ("code", "markdown"):  # the course has none: never HTML
+            cell = quoted_cell(cell)
         cells.append(cell)
     # re-insert the graded and trusted cells that are gone, after their source predecessor
     for scell in src.cells:

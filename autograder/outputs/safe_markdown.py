@@ -6,26 +6,32 @@ answer holding ``<script>``, ``<img onerror=...>``, ``<style>`` or a ``javascrip
 therefore ran in the marker's browser, with the marker's session: red team 7 gave itself full
 marks on answers nobody had read and zeroed classmates' grades that way.
 
-Two layers, both set up for the course by :func:`autograder.course.nbgrader_config`:
+Two layers, both set up for the course by :func:`autograder.course.config_text`:
 
 * :func:`markdown2html` replaces the Formgrader's filter of that name
   (``c.HTMLExporter.filters``): nbconvert renders the markdown exactly as before, then the HTML
   goes through an allow-list (bleach, nbconvert's own sanitiser): formatting, lists, tables,
-  links to ``http(s)``/``mailto``/the page itself, images that are ``data:`` rasters (a pasted
-  sketch) or relative. Anything else is escaped, so the marker reads the attempt as text.
-  MathJax text (``$...$``) and code blocks come out as nbconvert rendered them.
+  links to ``http(s)``/``mailto``/the page itself, and images only as ``data:`` rasters (a
+  pasted sketch; an image at any address would be fetched with the marker's session, and
+  ``/logout`` logged the marker out). Anything else is escaped, so the marker reads the attempt
+  as text. MathJax text (``$...$``) and code blocks come out as nbconvert rendered them (the
+  page's MathJax runs with its ``Safe`` extension). An answer that cannot be rendered at all
+  (a missing attachment) is shown as its source instead of taking the page down.
 * raw cells are not shown as HTML (``c.HTMLExporter.raw_mimetypes = []``), and the grader
-  turns a student's raw cell into a markdown cell quoting it (:func:`quoted_raw_cell`).
+  turns a student's raw cell, or one of a type nbformat does not know, into a markdown cell
+  quoting it (:func:`quoted_cell`); grading metadata the student put on a cell the course does
+  not know is dropped (``gradebook._merge``).
 """
 
 from __future__ import annotations
 
+import html
 import re
 
 import bleach
 from jinja2 import pass_context
 
-__all__ = ["ALLOWED_TAGS", "clean_html", "markdown2html", "quoted_raw_cell"]
+__all__ = ["ALLOWED_TAGS", "clean_html", "markdown2html", "quoted_cell"]
 
 #: HTML that nbconvert's markdown renderer produces for ordinary markdown, and nothing more
 ALLOWED_TAGS = frozenset({
@@ -34,14 +40,14 @@ ALLOWED_TAGS = frozenset({
     "strong", "sub", "summary", "sup", "table", "tbody", "td", "tfoot", "th", "thead", "tr",
     "u", "ul",
 })
-#: code highlighting's classes (pygments' short token names, ``highlight hl-python``) only: a
-#: class of the Formgrader's own style sheet could pin an answer over the marking form
+#: code highlighting's classes only (pygments' token names, ``highlight``, ``hl-python``): a
+#: class of the Formgrader's own style sheet (Bootstrap's ``btn``, ``navbar-fixed-top``) could
+#: dress an answer as the marking form or pin it over it
 _CLASS_TAGS = frozenset({"code", "div", "pre", "span"})
-_HIGHLIGHT_CLASSES = re.compile(r"^(highlight|hl-[\w-]+|language-[\w-]+|[a-z]{1,3}\d?)"
-                                r"( (highlight|hl-[\w-]+|language-[\w-]+|[a-z]{1,3}\d?))*$")
+_HIGHLIGHT_CLASS = re.compile(r"^(highlight|hl-[a-z0-9+#-]{1,30})$")
 _ATTRIBUTES = {
     "a": {"href", "title"},
-    "img": {"src", "alt", "title", "width", "height"},
+    "img": {"src", "alt", "title"},
     "td": {"align", "colspan", "rowspan"}, "th": {"align", "colspan", "rowspan"},
     "ol": {"start"},
 }
@@ -50,14 +56,25 @@ _RASTER_DATA_URL = re.compile(r"^data:image/(png|jpeg|gif|webp);base64,[A-Za-z0-
 _PROTOCOLS = frozenset({"http", "https", "mailto", "data"})
 
 
+def _highlight_classes(value: str) -> bool:
+    from pygments.token import STANDARD_TYPES
+
+    names = value.split()
+    return bool(names) and all(n in STANDARD_TYPES.values() or _HIGHLIGHT_CLASS.match(n)
+                               for n in names)
+
+
 def _allowed_attribute(tag: str, name: str, value: str) -> bool:
     if name == "class":
-        return tag in _CLASS_TAGS and bool(_HIGHLIGHT_CLASSES.match(value))
+        return tag in _CLASS_TAGS and _highlight_classes(value)
     if name == "title":
         return True
     if name not in _ATTRIBUTES.get(tag, ()):
         return False
-    if tag == "img" and name == "src" and value.strip().lower().startswith("data:"):
+    if tag == "img" and name == "src":
+        # only a picture the answer carries: any other address would be fetched with the
+        # marker's session (``/logout`` logged the marker out: red team 8) or tell a site when
+        # the marking happens
         return bool(_RASTER_DATA_URL.match(value.strip()))
     if tag == "a" and name == "href" and value.strip().lower().startswith("data:"):
         return False
@@ -71,7 +88,7 @@ def clean_html(html: str) -> str:
     Examples
     --------
     >>> clean_html('<p>ok <img src=x onerror="alert(1)"> <script>alert(2)</script></p>')
-    '<p>ok <img src="x"> &lt;script&gt;alert(2)&lt;/script&gt;</p>'
+    '<p>ok <img> &lt;script&gt;alert(2)&lt;/script&gt;</p>'
     """
     if not isinstance(html, str):
         raise ValueError(f"html must be a str, got {type(html).__name__}")
@@ -86,17 +103,26 @@ def markdown2html(context, source: str) -> str:
     from nbconvert.filters.markdown_mistune import IPythonRenderer, MarkdownWithMath
 
     cell = context.get("cell", {}) or {}
-    renderer = IPythonRenderer(escape=False, allow_harmful_protocols=False,
-                               attachments=cell.get("attachments", {}) or {},
-                               anchor_link_text="", exclude_anchor_links=True)
-    return clean_html(MarkdownWithMath(renderer=renderer).render(source))
+    try:
+        renderer = IPythonRenderer(escape=False, allow_harmful_protocols=False,
+                                   attachments=cell.get("attachments", {}) or {},
+                                   anchor_link_text="", exclude_anchor_links=True)
+        return clean_html(MarkdownWithMath(renderer=renderer).render(source))
+    except Exception as err:  # noqa: BLE001 - one odd answer must not take the page down
+        # (a missing or malformed attachment made the whole submission page a server error,
+        # so nothing of it could be marked: red team 8)
+        return (f"<p><em>This answer could not be shown as formatted text "
+                f"({html.escape(type(err).__name__)}); its source:</em></p>"
+                f"<pre>{html.escape(str(source))}</pre>")
 
 
-def quoted_raw_cell(cell: dict) -> dict:
-    """A student's raw cell as a markdown cell that shows its text in a code block (never
-    rendered as HTML, whatever its ``raw_mimetype``)."""
+def quoted_cell(cell: dict) -> dict:
+    """A student's raw cell (or a cell of a type nbformat does not know) as a markdown cell
+    that shows its text in a code block: never rendered as HTML, whatever its
+    ``raw_mimetype``."""
     source = cell.get("source", "")
-    source = "".join(source) if isinstance(source, list) else str(source)
+    source = "".join(map(str, source)) if isinstance(source, list) else str(source)
+    kind = re.sub(r"[^a-z]", "", str(cell.get("cell_type", "")).lower())[:20] or "unknown"
     fence = "`" * max(3, 1 + max((len(run) for run in re.findall(r"`+", source)), default=0))
     return {"cell_type": "markdown", "metadata": {},
-            "source": f"*(a raw cell)*\n\n{fence}text\n{source}\n{fence}\n"}
+            "source": f"*(a {kind} cell)*\n\n{fence}text\n{source}\n{fence}\n"}

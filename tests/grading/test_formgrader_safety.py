@@ -26,7 +26,7 @@ from html.parser import HTMLParser
 import pytest
 from jinja2 import Environment
 
-from autograder.outputs.safe_markdown import clean_html, markdown2html, quoted_raw_cell
+from autograder.outputs.safe_markdown import clean_html, markdown2html, quoted_cell
 
 MARK = "PWN7"
 PNG = base64.b64encode(b"\x89PNG\r\n\x1a\n" + b"\0" * 16).decode()
@@ -141,7 +141,7 @@ def test_clean_html_rejects_what_is_not_text():
 def test_a_raw_cell_is_quoted_whatever_its_fences():
     cell = {"cell_type": "raw", "metadata": {"raw_mimetype": "text/html"},
             "source": f"<script>{MARK}()</script>\n````\n"}
-    quoted = quoted_raw_cell(cell)
+    quoted = quoted_cell(cell)
     assert quoted["cell_type"] == "markdown" and quoted["metadata"] == {}
     html = _render(quoted["source"])
     page = _parse(html)
