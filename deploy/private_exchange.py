@@ -86,19 +86,29 @@ def _user_name(uid: int) -> str:
         return f"uid {uid}"
 
 
+#: a submission deeper or larger than this is refused before anything is read (a folder 1900
+#: levels deep made nbgrader's own size count overflow Python's stack: red team 9)
+MAX_DEPTH, MAX_ENTRIES = 16, 5000
+
+
 def newest_ctime_ns(folder: str, uid: int) -> int:
     """The newest ``st_ctime_ns`` over ``folder`` and everything in it, none of it followed.
 
     ``ctime`` is set by the kernel whenever a file's content, link count or mode changes; no
     user can set it back (unlike ``mtime``, ``touch -d``), so it is when the exchange last saw
     the submission change. Raises :class:`SubmissionRefused` on a symbolic link, a hard-linked
-    file, anything not a regular file or folder, anything not owned by ``uid``, or anything the
-    collecting account cannot read.
+    file, anything not a regular file or folder, anything not owned by ``uid``, more than
+    :data:`MAX_ENTRIES` entries or :data:`MAX_DEPTH` levels, or anything the collecting account
+    cannot read.
     """
-    newest, pending = 0, [folder]
+    newest, pending, seen = 0, [(folder, 0)], 0
     try:
         while pending:
-            path = pending.pop()
+            path, depth = pending.pop()
+            seen += 1
+            if seen > MAX_ENTRIES or depth > MAX_DEPTH:
+                raise SubmissionRefused(f"it holds more than {MAX_ENTRIES} entries or "
+                                        f"{MAX_DEPTH} levels of folders")
             st = os.lstat(path)
             reason = _refusal(path, st, uid)
             if reason:
@@ -106,10 +116,64 @@ def newest_ctime_ns(folder: str, uid: int) -> int:
             newest = max(newest, st.st_ctime_ns)
             if stat.S_ISDIR(st.st_mode):
                 with os.scandir(path) as entries:
-                    pending.extend(entry.path for entry in entries)
+                    pending.extend((entry.path, depth + 1) for entry in entries)
     except OSError as err:
         raise SubmissionRefused(f"cannot be read by the collecting account: {err}") from err
     return newest
+
+
+def copy_submission(src: str, dest: str, uid: int, ignore, max_file_bytes: int,
+                    max_total_bytes: int, chunk: int = 1 << 16) -> None:
+    """Copy the submission ``src`` into the new folder ``dest``: nothing followed, nothing of
+    the student's modes kept, every byte counted.
+
+    Each file is opened with ``O_NOFOLLOW`` and checked *as opened* (a regular file owned by
+    ``uid`` with one name): a file swapped for a link to ``/dev/zero`` after the scan filled
+    the disk through ``shutil.copytree`` (red team 9). Copies are 0640, folders 0750, with no
+    set-id bits or ACLs of the student's. ``ignore(folder, names)`` is nbgrader's
+    ``ignore_patterns``. Raises :class:`SubmissionRefused` when a file grows past
+    ``max_file_bytes`` or the whole past ``max_total_bytes`` while being copied.
+    """
+    total = 0
+    os.mkdir(dest, 0o750)
+    pending = [(src, dest, 0)]
+    while pending:
+        folder, target, depth = pending.pop()
+        if depth > MAX_DEPTH:
+            raise SubmissionRefused(f"it holds more than {MAX_DEPTH} levels of folders")
+        names = sorted(os.listdir(folder))
+        skipped = set(ignore(folder, names))
+        for name in names:
+            if name in skipped or (folder == src and name == TIMESTAMP_FILE):
+                continue
+            path, out = os.path.join(folder, name), os.path.join(target, name)
+            st = os.lstat(path)
+            if stat.S_ISDIR(st.st_mode) and _refusal(path, st, uid) is None:
+                os.mkdir(out, 0o750)
+                pending.append((path, out, depth + 1))
+                continue
+            total += _copy_file(path, out, uid, max_file_bytes, max_total_bytes - total, chunk)
+
+
+def _copy_file(path: str, out: str, uid: int, max_file_bytes: int, room: int,
+               chunk: int) -> int:
+    """Copy one file of a submission (see :func:`copy_submission`); returns its size."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    except OSError as err:
+        raise SubmissionRefused(f"{path} cannot be opened without following it: {err}") from err
+    copied = 0
+    with os.fdopen(fd, "rb") as source:
+        reason = _refusal(path, os.fstat(source.fileno()), uid)
+        if reason:
+            raise SubmissionRefused(reason)
+        with open(os.open(out, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o640), "wb") as target:
+            while block := source.read(chunk):
+                copied += len(block)
+                if copied > min(max_file_bytes, room):
+                    raise SubmissionRefused(f"{path} grew past the size limits while copied")
+                target.write(block)
+    return copied
 
 
 def utc_stamp(ctime_ns: int, timestamp_format: str) -> str:
@@ -142,13 +206,13 @@ class PrivateExchangeCollect(ExchangeCollect):
             top = os.lstat(path)
             uid = pwd.getpwnam(student).pw_uid
         except KeyError:
-            self.log.warning("Skipped %s: %r, the student it names, is no Unix user", path, student)
+            self.log.warning("Skipped %r: %r, the student it names, is no Unix user", path, student)
             return None
         except OSError as err:
-            self.log.warning("Skipped %s: %s", path, err)
+            self.log.warning("Skipped %r: %r", path, str(err))
             return None
         if top.st_uid != uid:
-            self.log.warning("Skipped %s: it claims to be %s's submission but is owned by %s",
+            self.log.warning("Skipped %r: it claims to be %r's submission but is owned by %r",
                              path, student, _user_name(top.st_uid))
             return None
         try:
@@ -163,8 +227,10 @@ class PrivateExchangeCollect(ExchangeCollect):
                 "stamp": stamp, "ctime_ns": ctime_ns, "uid": uid}
 
     def _log_refusal(self, path, student, why):
-        self.log.warning("Refused %s, %s's submission: %s (nothing of it collected)",
-                         path, student, why)
+        # every name and reason as a Python literal: a folder named with terminal escapes and
+        # a newline forged a "Collecting submission" line (red team 9)
+        self.log.warning("Refused %r, %r's submission: %r (nothing of it collected)",
+                         path, student, str(why))
 
     def init_src(self):
         """Every submission that counts, by student (nbgrader's checks of the course first)."""
@@ -224,7 +290,8 @@ class PrivateExchangeCollect(ExchangeCollect):
         return False
 
     def _collect(self, record) -> bool:
-        """Copy ``record`` into the course (``False``: refused, nothing changed)."""
+        """Copy ``record`` into the course (``False``: refused, nothing changed). Whatever a
+        submission holds, the staging copy goes and the other students are still collected."""
         student, assignment = record["username"], self.coursedir.assignment_id
         dest = self.coursedir.format_path(self.coursedir.submitted_directory, student, assignment)
         if not self._wanted(record, dest):
@@ -234,36 +301,31 @@ class PrivateExchangeCollect(ExchangeCollect):
         copy = os.path.join(staging, assignment)
         src = os.path.join(self.inbound_path, record["filename"])
         try:
-            self.do_copy(src, copy)
-            after = newest_ctime_ns(src, record["uid"])
-            if after != record["ctime_ns"]:
+            self._copy(src, copy, record["uid"])
+            if newest_ctime_ns(src, record["uid"]) != record["ctime_ns"]:
                 raise SubmissionRefused("it changed while being collected")
-        except (SubmissionRefused, shutil.Error, OSError) as why:
-            shutil.rmtree(staging)
+            with open(os.path.join(copy, TIMESTAMP_FILE), "w") as fh:
+                fh.write(record["stamp"])
+            os.chmod(os.path.join(copy, TIMESTAMP_FILE), 0o640)
+            if os.path.isdir(dest):
+                self.log.info("Updating submission: %r %s", student, assignment)
+                shutil.rmtree(dest)
+            else:
+                self.log.info("Collecting submission: %r %s", student, assignment)
+            os.rename(copy, dest)
+            return True
+        except Exception as why:  # noqa: BLE001 - one submission never stops the collect
             self._log_refusal(src, student, why)
             return False
-        with open(os.path.join(copy, TIMESTAMP_FILE), "w") as fh:
-            fh.write(record["stamp"])
-        if os.path.isdir(dest):
-            self.log.info("Updating submission: %s %s", student, assignment)
-            shutil.rmtree(dest)
-        else:
-            self.log.info("Collecting submission: %s %s", student, assignment)
-        os.rename(copy, dest)
-        os.rmdir(staging)
-        return True
+        finally:
+            shutil.rmtree(staging, ignore_errors=True)
 
-    def do_copy(self, src, dest, log=None):
-        """nbgrader's copy (size limit, ignore/include globs) with links copied as links, never
-        followed, and without the student's ``timestamp.txt``."""
-        if self.get_size(src) > 1000 * self.coursedir.max_dir_size:
-            raise SubmissionRefused(f"it is larger than {self.coursedir.max_dir_size} kB")
-        nbgrader_ignore = ignore_patterns(exclude=self.coursedir.ignore,
-                                          include=self.coursedir.include,
-                                          max_file_size=self.coursedir.max_file_size, log=self.log)
-
-        def ignore(folder, names):
-            ignored = nbgrader_ignore(folder, names)
-            return [*ignored, TIMESTAMP_FILE] if folder == src else ignored
-
-        shutil.copytree(src, dest, symlinks=True, ignore=ignore)
+    def _copy(self, src, dest, uid):
+        """nbgrader's copy rules (ignore/include globs, ``max_file_size``, ``max_dir_size``)
+        applied by :func:`copy_submission`: nothing followed, every byte counted, the
+        student's ``timestamp.txt`` left out."""
+        ignore = ignore_patterns(exclude=self.coursedir.ignore, include=self.coursedir.include,
+                                 max_file_size=self.coursedir.max_file_size, log=self.log)
+        copy_submission(src, dest, uid, ignore,
+                        max_file_bytes=1000 * self.coursedir.max_file_size,
+                        max_total_bytes=1000 * self.coursedir.max_dir_size)

@@ -29,6 +29,7 @@ from __future__ import annotations
 import datetime
 import os
 import shutil
+import stat
 import subprocess
 import tempfile
 import time
@@ -261,11 +262,27 @@ import private_exchange
 
 
 class RacyCollect(private_exchange.PrivateExchangeCollect):
-    def do_copy(self, src, dest, log=None):
-        super().do_copy(src, dest, log)
+    def _copy(self, src, dest, uid):
+        super()._copy(src, dest, uid)
         if "+{stamp}+" in src:
             with open(src + "/{notebook}", "a") as fh:
                 fh.write(" and more")
+"""
+
+#: a collect during whose scan-to-copy gap the notebook becomes a link to /dev/zero (red team 9:
+#: the student swapped it once collect was busy with larger files; the copy filled the disk)
+SWAPPING_COLLECT = """
+import os
+
+import private_exchange
+
+
+class SwappingCollect(private_exchange.PrivateExchangeCollect):
+    def _copy(self, src, dest, uid):
+        if "+{stamp}+" in src:
+            os.replace(src + "/{notebook}", src + "/old")
+            os.symlink("/dev/zero", src + "/{notebook}")
+        super()._copy(src, dest, uid)
 """
 
 
@@ -284,3 +301,62 @@ def test_a_submission_changed_while_copied_is_refused(place):
     _log_line(log, second["folder"], "Refused", HONEST, "changed while being collected")
     assert _content(place, HONEST) == "first"
     _assert_true_time(place, HONEST, first)
+
+
+def test_a_file_swapped_for_a_link_after_the_scan_is_not_followed(place):
+    """Red team 9: a file that becomes a link to ``/dev/zero`` between the scan and the copy.
+    The copy opens nothing through a link: refused at once, no staging folder left, the
+    student's earlier submission collected."""
+    first = _submit(place, HONEST, "first")
+    time.sleep(1.1)
+    late_stamp = "2026-12-02 00:00:00.000000 UTC"
+    second = _submit(place, HONEST, "second", stamp=late_stamp)
+    _as_grader_file(Path(hub.home_of(GRADER)) / "swapping_collect.py",
+                    SWAPPING_COLLECT.format(stamp=late_stamp, notebook=NB))
+    log = _collect(place, "--ExchangeFactory.collect=swapping_collect.SwappingCollect")
+    _log_line(log, second["folder"], "Refused", HONEST, "without following it")
+    assert _content(place, HONEST) == "first"
+    _assert_true_time(place, HONEST, first)
+    assert not list((place["course"] / "submitted" / HONEST).glob(".collecting-*"))
+
+
+def test_a_deep_folder_is_refused_and_the_others_still_collected(place):
+    """Red team 9: a folder 200 levels deep overflowed nbgrader's size count and stopped the
+    collect for everyone after it. Now that submission alone is refused."""
+    deep = _submit(place, MALLORY, "deep")
+    made = _as(MALLORY, 'cd "$D" && for i in $(seq 200); do mkdir d && cd d; done', D=deep["folder"])
+    assert made.returncode == 0, made.stderr
+    honest = _submit(place, HONEST, "honest")
+    log = _collect(place)
+    _log_line(log, deep["folder"], "Refused", MALLORY, "levels of folders")
+    assert _content(place, MALLORY) is None and _content(place, HONEST) == "honest"
+    _assert_true_time(place, HONEST, honest)
+
+
+def test_the_collected_copy_keeps_none_of_the_students_modes(place):
+    """Red team 9: a set-id, world-writable file came out of collect owned by the grader with
+    its modes. Copies are the grader's, 0640 (folders 0750)."""
+    sub = _submit(place, MALLORY, "mine")
+    made = _as(MALLORY, 'mkdir "$D/sub" && printf x > "$D/sub/tool" && chmod 6777 "$D/sub/tool" '
+                        '&& chmod 2777 "$D/sub" && chmod 666 "$D/$NB"', D=sub["folder"], NB=NB)
+    assert made.returncode == 0, made.stderr
+    _collect(place)
+    copy = _collected(place, MALLORY)
+    assert _content(place, MALLORY) == "mine"
+    for path in (copy / NB, copy / "sub" / "tool", copy / "timestamp.txt"):
+        assert stat.S_IMODE(path.lstat().st_mode) == 0o640, (path, oct(path.lstat().st_mode))
+    assert stat.S_IMODE((copy / "sub").lstat().st_mode) == 0o750
+
+
+def test_a_folder_name_cannot_forge_the_log(place):
+    """Red team 9: a name with terminal escapes and a newline hid the "Skipped" warning and
+    printed a fake "Collecting submission" line. Names are logged as Python literals."""
+    forged = place["inbound"] / (f"{VICTIM}+{A}+2026-12-01 00:00:00.000000 UTC+ab\x1b[2K\r"
+                                 f"\n[CollectApp | INFO] Collecting submission: {VICTIM} {A}")
+    made = _as(MALLORY, 'mkdir "$D" && printf x > "$D/$NB"', D=forged, NB=NB)
+    assert made.returncode == 0, made.stderr
+    log = _collect(place)
+    assert "\x1b" not in log
+    lines = log.splitlines()
+    assert not any(line.startswith("[CollectApp | INFO] Collecting submission") for line in lines)
+    assert any("Skipped" in line and "owned by" in line and MALLORY in line for line in lines)
