@@ -12,6 +12,7 @@ but the standard library), so any stage, and any test, can use it.
 from __future__ import annotations
 
 import enum
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -276,9 +277,19 @@ def format_score(x: float) -> str:
     return text if text not in ("", "-0") else "0"
 
 
+#: control characters (C0 but tab and newline, DEL, C1): a student's exception message with
+#: terminal colour codes drew a fake green "[ok] all cases passed" after the real verdict
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f]")
+
+
+def printable(text: str) -> str:
+    """``text`` with every control character shown as its ``\\x..`` escape."""
+    return _CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}", text)
+
+
 def csv_row(r: CellResult) -> dict[str, str]:
     """The ``grades.csv`` row of a result."""
     return {"student": r.student, "notebook": r.notebook, "grade_id": r.grade_id,
             "score": "" if r.score is None else format_score(r.score),
             "max_score": format_score(r.max_score), "status": Status(r.status).value,
-            "message": r.message}
+            "message": printable(r.message)}

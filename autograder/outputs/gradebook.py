@@ -37,7 +37,8 @@ import warnings
 from pathlib import Path
 
 from ..course import default_db_url
-from ..model import ASSIGNMENT, Batch, CellKind, CellResult, SourceNotebook, Status, Submission
+from ..model import (ASSIGNMENT, Batch, CellKind, CellResult, SourceNotebook, Status,
+                     Submission, printable)
 from .safe_markdown import quoted_cell
 
 COURSE_ID = "4f9"
@@ -251,7 +252,7 @@ def _clean(cell: dict) -> dict:
 
 def _verdict_output(r: CellResult) -> dict:
     score = "-" if r.score is None else f"{r.score:g}"
-    text = f"autograder: {score} / {r.max_score:g} [{r.status.value}] {r.message}\n"
+    text = f"autograder: {score} / {r.max_score:g} [{r.status.value}] {printable(r.message)}\n"
     return {"output_type": "stream", "name": "stdout", "text": text}
 
 

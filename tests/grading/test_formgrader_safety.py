@@ -18,6 +18,7 @@ from __future__ import annotations
 import base64
 import copy
 import json
+import re
 import subprocess
 import sys
 import urllib.request
@@ -49,6 +50,7 @@ PAYLOADS = [
     f"<div class=\"navbar-fixed-top\" title=\"{MARK}\">over the form</div>",
     f"<!-- {MARK} --><scr<script>ipt>{MARK}()</script>",
     f"![pic](attachment:v.svg) {MARK}",
+    f"<img src=\"/logout?{MARK}\"> and ![x](https://example.org/{MARK}.png)",
 ]
 
 #: payloads whose first tag is not allowed at all: the marker reads them whole, as text
@@ -78,6 +80,8 @@ class _Live(HTMLParser):
                     url.startswith(("javascript:", "vbscript:"))
                     or (url.startswith("data:") and not url.startswith("data:image/png"))):
                 self.live.append(f"{tag}.{name}={value}")
+            elif tag == "img" and name == "src" and not url.startswith("data:image/"):
+                self.live.append(f"img.src={value}")      # fetched with the marker's session
             elif name == "class" and (tag not in ("span", "div", "pre", "code")
                                       or "navbar" in value):
                 self.live.append(f"{tag}.class={value}")
@@ -133,6 +137,32 @@ def test_ordinary_markdown_comes_through():
         assert tag in html, (tag, html)
 
 
+def test_an_answer_that_cannot_be_rendered_is_shown_as_its_source():
+    """Red team 8: a picture named but not attached (an honest slip too) made the whole
+    submission page a server error; now that answer alone falls back to its source."""
+    html = _render(f"see ![sketch](attachment:gone.png) <script>{MARK}</script>",
+                   {"other.png": {"image/png": "not base64 at all"}})
+    page = _parse(html)
+    assert not page.live, html
+    assert "could not be shown as formatted text" in html
+    assert f"see ![sketch](attachment:gone.png) <script>{MARK}</script>" in "".join(page.text)
+
+
+def test_control_characters_of_a_message_are_shown_not_obeyed():
+    """Red team 8: terminal colour codes in a student's exception message drew a fake green
+    "[ok]" after the real verdict (the Formgrader colours stream output); grades.csv too."""
+    from autograder.model import CellResult, Status, csv_row
+    from autograder.outputs.gradebook import _verdict_output
+
+    fake = "boom\x1b[8m hidden\x1b[0m\r\x1b[32m[ok] all cases passed\x9b"
+    r = CellResult(student="s", notebook="q5_phong", grade_id="g", name="f", score=0.0,
+                   max_score=1.0, status=Status.ERROR, message=fake)
+    for text in (_verdict_output(r)["text"], csv_row(r)["message"]):
+        assert not any(ord(ch) < 32 and ch not in "\n\t" or 0x7f <= ord(ch) <= 0x9f
+                       for ch in text), repr(text)
+        assert "\\x1b[32m[ok] all cases passed" in text
+
+
 def test_clean_html_rejects_what_is_not_text():
     with pytest.raises(ValueError, match="html must be a str"):
         clean_html(None)
@@ -160,6 +190,18 @@ def _attack(nb: dict, manual_ids: list[str]) -> dict:
             cell["attachments"] = {"v.svg": {"image/svg+xml": SVG}}
     nb["cells"].append({"cell_type": "raw", "metadata": {"raw_mimetype": "text/html"},
                         "source": f"<script>window.{MARK} = 2</script>"})
+    # red team 8: grading metadata of the student's own (a dict grade_id broke the writer; a
+    # null one drew a fake answer panel of 99 points), a cell type nbformat does not know, a
+    # picture named but not attached (the page was a server error)
+    fake = {"solution": True, "grade": True, "points": 99, "locked": False}
+    nb["cells"] += [
+        {"cell_type": "markdown", "metadata": {"nbgrader": {**fake, "grade_id": {"x": 1}}},
+         "source": "a dict grade_id"},
+        {"cell_type": "markdown", "metadata": {"nbgrader": {**fake, "grade_id": None}}},
+        {"cell_type": "html", "metadata": {}, "source": f"<script>window.{MARK} = 3</script>"},
+        {"cell_type": "markdown", "metadata": {}, "source": "![gone](attachment:gone.png)"},
+    ]
+    nb["cells"][-3]["source"] = "a null grade_id"
     return nb
 
 
@@ -197,3 +239,6 @@ def test_the_formgrader_shows_an_attack_as_text(tmp_path, sources):
     assert f"My answer to {manual_ids[0]}." in text          # the answer is there, as text
     assert f"<script>window.{MARK} = 1</script>" in text       # the attempt shown, not run
     assert f"<script>window.{MARK} = 2</script>" in text       # the raw cell quoted
+    assert f"<script>window.{MARK} = 3</script>" in text       # the unknown cell type quoted
+    assert "a dict grade_id" in text and "a null grade_id" in text
+    assert not re.search(r'type="number"/?>\s*/\s*99\b', html)   # no score box of 99 points
