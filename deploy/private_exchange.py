@@ -25,6 +25,7 @@ records: who owns each file (``lstat``) and when it last changed (``ctime``).
 from __future__ import annotations
 
 import datetime
+import fnmatch
 import glob
 import os
 import pwd
@@ -35,7 +36,7 @@ import tempfile
 from nbgrader.api import Gradebook, MissingEntry
 from nbgrader.exchange.default.collect import ExchangeCollect, groupby
 from nbgrader.exchange.default.submit import ExchangeSubmit
-from nbgrader.utils import check_mode, ignore_patterns, parse_utc
+from nbgrader.utils import check_mode, parse_utc
 
 #: permission bits a submission never gets: nothing for "other"
 OTHERS = 0o007
@@ -116,63 +117,100 @@ def newest_ctime_ns(folder: str, uid: int) -> int:
             newest = max(newest, st.st_ctime_ns)
             if stat.S_ISDIR(st.st_mode):
                 with os.scandir(path) as entries:
-                    pending.extend((entry.path, depth + 1) for entry in entries)
+                    for entry in entries:       # capped while listing: a flat folder of
+                        if seen + len(pending) >= MAX_ENTRIES:   # millions costs nothing
+                            raise SubmissionRefused(f"it holds more than {MAX_ENTRIES} entries")
+                        pending.append((entry.path, depth + 1))
     except OSError as err:
         raise SubmissionRefused(f"cannot be read by the collecting account: {err}") from err
     return newest
 
 
-def copy_submission(src: str, dest: str, uid: int, ignore, max_file_bytes: int,
+#: what every entry costs against ``max_dir_size`` whatever its size: an empty file or folder
+#: still takes the disk an inode and a block
+ENTRY_BYTES = 4096
+_DIR_FLAGS = os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW
+
+
+def copy_submission(src: str, dest: str, uid: int, skipped, max_file_bytes: int,
                     max_total_bytes: int, chunk: int = 1 << 16) -> None:
     """Copy the submission ``src`` into the new folder ``dest``: nothing followed, nothing of
-    the student's modes kept, every byte counted.
+    the student's modes kept, every byte and entry counted.
 
-    Each file is opened with ``O_NOFOLLOW`` and checked *as opened* (a regular file owned by
-    ``uid`` with one name): a file swapped for a link to ``/dev/zero`` after the scan filled
-    the disk through ``shutil.copytree`` (red team 9). Copies are 0640, folders 0750, with no
-    set-id bits or ACLs of the student's. ``ignore(folder, names)`` is nbgrader's
-    ``ignore_patterns``. Raises :class:`SubmissionRefused` when a file grows past
-    ``max_file_bytes`` or the whole past ``max_total_bytes`` while being copied.
+    The walk goes by file descriptors: each folder and file is opened relative to its parent
+    with ``O_NOFOLLOW``, checked *as opened* (a folder or regular file owned by ``uid``, a file
+    with one name) and a folder is listed through its descriptor. A path checked and then
+    swapped for a link is never followed: a file swapped for a link to ``/dev/zero`` filled the
+    disk through ``copytree`` (red team 9), folders swapped for links to big folders after the
+    check multiplied the copy (red team 10). Copies are 0640, folders 0750, with no set-id bits
+    or ACLs of the student's. ``skipped(name, st)`` says which entries nbgrader's rules leave
+    out. Raises :class:`SubmissionRefused` past :data:`MAX_DEPTH`, :data:`MAX_ENTRIES`,
+    ``max_file_bytes`` for a file or ``max_total_bytes`` (each entry costing at least
+    :data:`ENTRY_BYTES`) in all.
     """
-    total = 0
-    os.mkdir(dest, 0o750)
-    pending = [(src, dest, 0)]
-    while pending:
-        folder, target, depth = pending.pop()
-        if depth > MAX_DEPTH:
-            raise SubmissionRefused(f"it holds more than {MAX_DEPTH} levels of folders")
-        names = sorted(os.listdir(folder))
-        skipped = set(ignore(folder, names))
-        for name in names:
-            if name in skipped or (folder == src and name == TIMESTAMP_FILE):
-                continue
-            path, out = os.path.join(folder, name), os.path.join(target, name)
-            st = os.lstat(path)
-            if stat.S_ISDIR(st.st_mode) and _refusal(path, st, uid) is None:
-                os.mkdir(out, 0o750)
-                pending.append((path, out, depth + 1))
-                continue
-            total += _copy_file(path, out, uid, max_file_bytes, max_total_bytes - total, chunk)
-
-
-def _copy_file(path: str, out: str, uid: int, max_file_bytes: int, room: int,
-               chunk: int) -> int:
-    """Copy one file of a submission (see :func:`copy_submission`); returns its size."""
+    budget = {"bytes": max_total_bytes, "entries": MAX_ENTRIES}
     try:
-        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+        top = os.open(src, _DIR_FLAGS)
     except OSError as err:
-        raise SubmissionRefused(f"{path} cannot be opened without following it: {err}") from err
+        raise SubmissionRefused(f"{src} cannot be opened as a folder: {err}") from err
+    try:
+        _check_opened(src, top, uid)
+        os.mkdir(dest, 0o750)
+        _copy_folder(top, src, dest, uid, skipped, max_file_bytes, budget, chunk, depth=0)
+    finally:
+        os.close(top)
+
+
+def _check_opened(path: str, fd: int, uid: int) -> None:
+    reason = _refusal(path, os.fstat(fd), uid)
+    if reason:
+        raise SubmissionRefused(reason)
+
+
+def _copy_folder(fd: int, path: str, target: str, uid: int, skipped, max_file_bytes: int,
+                 budget: dict, chunk: int, depth: int) -> None:
+    """Copy the open folder ``fd`` (at ``path``) into ``target`` (see :func:`copy_submission`)."""
+    if depth > MAX_DEPTH:
+        raise SubmissionRefused(f"it holds more than {MAX_DEPTH} levels of folders")
+    for name in sorted(os.listdir(fd)):
+        budget["entries"] -= 1
+        budget["bytes"] -= ENTRY_BYTES
+        if budget["entries"] < 0 or budget["bytes"] < 0:
+            raise SubmissionRefused("it grew past the size or entry limits while copied")
+        where, out = os.path.join(path, name), os.path.join(target, name)
+        st = os.stat(name, dir_fd=fd, follow_symlinks=False)
+        if (depth == 0 and name == TIMESTAMP_FILE) or skipped(name, st):
+            continue
+        flags = _DIR_FLAGS if stat.S_ISDIR(st.st_mode) else os.O_RDONLY | os.O_NOFOLLOW | \
+            os.O_NONBLOCK
+        try:
+            child = os.open(name, flags, dir_fd=fd)
+        except OSError as err:
+            raise SubmissionRefused(f"{where} cannot be opened without following it: "
+                                    f"{err}") from err
+        try:
+            _check_opened(where, child, uid)
+            if stat.S_ISDIR(os.fstat(child).st_mode):
+                os.mkdir(out, 0o750)
+                _copy_folder(child, where, out, uid, skipped, max_file_bytes, budget, chunk,
+                             depth + 1)
+            else:
+                budget["bytes"] -= _copy_file(child, where, out, min(max_file_bytes,
+                                                                     budget["bytes"]), chunk)
+        finally:
+            os.close(child)
+
+
+def _copy_file(fd: int, where: str, out: str, limit: int, chunk: int) -> int:
+    """Copy the open, checked file ``fd`` to the new file ``out`` (0640); returns its size.
+    Raises :class:`SubmissionRefused` once more than ``limit`` bytes come."""
     copied = 0
-    with os.fdopen(fd, "rb") as source:
-        reason = _refusal(path, os.fstat(source.fileno()), uid)
-        if reason:
-            raise SubmissionRefused(reason)
-        with open(os.open(out, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o640), "wb") as target:
-            while block := source.read(chunk):
-                copied += len(block)
-                if copied > min(max_file_bytes, room):
-                    raise SubmissionRefused(f"{path} grew past the size limits while copied")
-                target.write(block)
+    with open(os.open(out, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o640), "wb") as target:
+        while block := os.read(fd, chunk):
+            copied += len(block)
+            if copied > limit:
+                raise SubmissionRefused(f"{where} grew past the size limits while copied")
+            target.write(block)
     return copied
 
 
@@ -321,11 +359,25 @@ class PrivateExchangeCollect(ExchangeCollect):
             shutil.rmtree(staging, ignore_errors=True)
 
     def _copy(self, src, dest, uid):
-        """nbgrader's copy rules (ignore/include globs, ``max_file_size``, ``max_dir_size``)
-        applied by :func:`copy_submission`: nothing followed, every byte counted, the
-        student's ``timestamp.txt`` left out."""
-        ignore = ignore_patterns(exclude=self.coursedir.ignore, include=self.coursedir.include,
-                                 max_file_size=self.coursedir.max_file_size, log=self.log)
-        copy_submission(src, dest, uid, ignore,
+        """nbgrader's copy rules (``CourseDirectory.ignore``/``include`` globs,
+        ``max_file_size``, ``max_dir_size``) applied by :func:`copy_submission`: nothing
+        followed, every byte counted, the student's ``timestamp.txt`` left out."""
+        copy_submission(src, dest, uid, self._skipped,
                         max_file_bytes=1000 * self.coursedir.max_file_size,
                         max_total_bytes=1000 * self.coursedir.max_dir_size)
+
+    def _skipped(self, name: str, st: os.stat_result) -> bool:
+        """nbgrader's ``ignore_patterns`` for one entry, on what ``lstat`` says of it (its own
+        log printed names raw: red team 10)."""
+        coursedir = self.coursedir
+        if any(fnmatch.fnmatch(name, pattern) for pattern in coursedir.ignore):
+            return True
+        if not stat.S_ISREG(st.st_mode):
+            return False
+        if coursedir.include and not any(fnmatch.fnmatch(name, p) for p in coursedir.include):
+            return True
+        if coursedir.max_file_size and st.st_size > 1000 * coursedir.max_file_size:
+            self.log.warning("Ignoring file too large %r (see CourseDirectory.max_file_size)",
+                             name)
+            return True
+        return False

@@ -96,6 +96,17 @@ def clean_html(html: str) -> str:
                         protocols=_PROTOCOLS, strip=False, strip_comments=True)
 
 
+#: added to every picture *after* cleaning (the student's own styles are gone by then): a pasted
+#: picture 4 x 60,000 px pushed the rubric 60,000 px down the page (red team 10)
+_PICTURE_STYLE = "max-width: 100%; max-height: 40em; object-fit: contain"
+
+
+def _fitted_pictures(html_text: str) -> str:
+    """Every picture of cleaned HTML at most 40em tall. Only a real tag can start with "<img"
+    there: bleach escapes "<" in text and in attribute values (pinned by a test)."""
+    return re.sub(r"<img\b", f'<img style="{_PICTURE_STYLE}"', html_text)
+
+
 @pass_context
 def markdown2html(context, source: str) -> str:
     """The Formgrader's ``markdown2html`` filter, sanitised: nbconvert's rendering of
@@ -107,7 +118,7 @@ def markdown2html(context, source: str) -> str:
         renderer = IPythonRenderer(escape=False, allow_harmful_protocols=False,
                                    attachments=cell.get("attachments", {}) or {},
                                    anchor_link_text="", exclude_anchor_links=True)
-        return clean_html(MarkdownWithMath(renderer=renderer).render(source))
+        return _fitted_pictures(clean_html(MarkdownWithMath(renderer=renderer).render(source)))
     except Exception as err:  # noqa: BLE001 - one odd answer must not take the page down
         # (a missing or malformed attachment made the whole submission page a server error,
         # so nothing of it could be marked: red team 8)

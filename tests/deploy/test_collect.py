@@ -360,3 +360,59 @@ def test_a_folder_name_cannot_forge_the_log(place):
     lines = log.splitlines()
     assert not any(line.startswith("[CollectApp | INFO] Collecting submission") for line in lines)
     assert any("Skipped" in line and "owned by" in line and MALLORY in line for line in lines)
+
+
+# -- the copy itself, in this process (no accounts needed) ---------------------------------------
+
+def _tree(root: Path, files: int = 2) -> Path:
+    sub = root / "submission"
+    (sub / "a").mkdir(parents=True)
+    (sub / "b").mkdir()
+    for k in range(files):
+        (sub / "a" / f"f{k}").write_text("x")
+        (sub / "b" / f"g{k}").write_text("y")
+    return sub
+
+
+def test_a_folder_swapped_for_a_link_after_its_check_is_never_listed(tmp_path):
+    """Red team 10: folders checked, then swapped for links to big folders before the copy
+    listed them, multiplied the copy (100,000 inodes). The walk lists each folder through the
+    descriptor it checked, and opens nothing through a link: the swap refuses the submission
+    and nothing of the linked folder is copied."""
+    import private_exchange as pe
+
+    sub = _tree(tmp_path)
+    big = tmp_path / "big"
+    big.mkdir()
+    for k in range(500):
+        (big / f"h{k}").write_text("z")
+
+    def skipped(name, st):
+        if name == "b" and not (sub / "b").is_symlink():   # just after "b" was looked at
+            shutil.rmtree(sub / "b")
+            (sub / "b").symlink_to(big)
+        return False
+
+    dest = tmp_path / "copy"
+    with pytest.raises(pe.SubmissionRefused, match="without following it"):
+        pe.copy_submission(str(sub), str(dest), os.getuid(), skipped, max_file_bytes=10**6,
+                           max_total_bytes=10**8)
+    copied = [p.name for p in dest.rglob("*")]
+    assert not any(name.startswith("h") for name in copied), copied
+    assert sorted(n for n in copied if n.startswith("f")) == ["f0", "f1"]   # "a" came first
+
+
+def test_every_entry_counts_against_the_size_limit(tmp_path):
+    """Empty files cost nothing in bytes but an inode each: each entry is charged
+    ``ENTRY_BYTES``, so 300 empty files do not fit in 100 entries' worth."""
+    import private_exchange as pe
+
+    sub = _tree(tmp_path, files=150)
+    for path in sub.rglob("f*"):
+        path.write_text("")
+    with pytest.raises(pe.SubmissionRefused, match="limits"):
+        pe.copy_submission(str(sub), str(tmp_path / "copy"), os.getuid(), lambda n, s: False,
+                           max_file_bytes=10**6, max_total_bytes=100 * pe.ENTRY_BYTES)
+    pe.copy_submission(str(sub), str(tmp_path / "whole"), os.getuid(), lambda n, s: False,
+                       max_file_bytes=10**6, max_total_bytes=400 * pe.ENTRY_BYTES)
+    assert len(list((tmp_path / "whole").rglob("*"))) == 2 + 300
