@@ -286,35 +286,25 @@ class SwappingCollect(private_exchange.PrivateExchangeCollect):
 """
 
 
-def test_a_submission_changed_while_copied_is_refused(place):
-    """A write into the submission during its copy (its ``ctime`` moves): refused, and the
-    student's previous submission, with its own time, collected instead."""
+@pytest.mark.parametrize("module, source, cls, reason", [
+    ("racy_collect", RACY_COLLECT, "RacyCollect", "changed while being collected"),
+    ("swapping_collect", SWAPPING_COLLECT, "SwappingCollect", "without following it"),
+], ids=["written-while-copied", "swapped-for-a-link"])
+def test_a_submission_changed_under_the_collect_is_refused(place, module, source, cls, reason):
+    """A write into the submission during its copy (its ``ctime`` moves), or its notebook
+    swapped for a link to ``/dev/zero`` between the scan and the copy (red team 9: the copy
+    filled the disk): refused, no staging folder left, and the student's previous submission,
+    with its own time, collected instead."""
     first = _submit(place, HONEST, "first")
     time.sleep(1.1)
     late_stamp = "2026-12-02 00:00:00.000000 UTC"
     second = _submit(place, HONEST, "second", stamp=late_stamp)
     opened = _as(HONEST, 'chmod 660 "$F"', F=second["folder"] / NB)  # the grader may write it
     assert opened.returncode == 0, opened.stderr
-    _as_grader_file(Path(hub.home_of(GRADER)) / "racy_collect.py",
-                    RACY_COLLECT.format(stamp=late_stamp, notebook=NB))
-    log = _collect(place, "--ExchangeFactory.collect=racy_collect.RacyCollect")
-    _log_line(log, second["folder"], "Refused", HONEST, "changed while being collected")
-    assert _content(place, HONEST) == "first"
-    _assert_true_time(place, HONEST, first)
-
-
-def test_a_file_swapped_for_a_link_after_the_scan_is_not_followed(place):
-    """Red team 9: a file that becomes a link to ``/dev/zero`` between the scan and the copy.
-    The copy opens nothing through a link: refused at once, no staging folder left, the
-    student's earlier submission collected."""
-    first = _submit(place, HONEST, "first")
-    time.sleep(1.1)
-    late_stamp = "2026-12-02 00:00:00.000000 UTC"
-    second = _submit(place, HONEST, "second", stamp=late_stamp)
-    _as_grader_file(Path(hub.home_of(GRADER)) / "swapping_collect.py",
-                    SWAPPING_COLLECT.format(stamp=late_stamp, notebook=NB))
-    log = _collect(place, "--ExchangeFactory.collect=swapping_collect.SwappingCollect")
-    _log_line(log, second["folder"], "Refused", HONEST, "without following it")
+    _as_grader_file(Path(hub.home_of(GRADER)) / f"{module}.py",
+                    source.format(stamp=late_stamp, notebook=NB))
+    log = _collect(place, f"--ExchangeFactory.collect={module}.{cls}")
+    _log_line(log, second["folder"], "Refused", HONEST, reason)
     assert _content(place, HONEST) == "first"
     _assert_true_time(place, HONEST, first)
     assert not list((place["course"] / "submitted" / HONEST).glob(".collecting-*"))
