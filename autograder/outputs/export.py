@@ -11,17 +11,20 @@
   automatic and manual scores, extra credit, whether the cell was marked, and the comment.
 
 A student's name, e-mail and LMS id come from nbgrader's student table (``nbgrader db student
-import`` fills it). Marks are rounded to ``decimals`` places; each question's column is its
-notebook's score. The late penalty, taken from the total, is ``late_per_day`` percent of the
-assignment's marks per started day after the due date (with any extension nbgrader records),
-never more than the total. While a written answer waits for a marker, :func:`unmarked` lists it
-and the command refuses to write final grades unless told ``--allow-unmarked``.
+import`` fills it). Marks are rounded to ``decimals`` places, a half always up
+(:func:`round_half_up`: 13.25 gives 13.3, as a mark sheet is read, where Python's ``round``
+gives 13.2); each question's column is its notebook's score. The late penalty, taken from the
+total, is ``late_per_day`` percent of the assignment's marks per started day after the due date
+(with any extension nbgrader records), never more than the total. While a written answer waits
+for a marker, :func:`unmarked` lists it and the command refuses to write final grades unless
+told ``--allow-unmarked``.
 """
 
 from __future__ import annotations
 
 import csv
 import datetime as dt
+import decimal
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -103,6 +106,24 @@ def late_penalty(row: StudentGrades, total_max: float, late_per_day: float,
     return min(sum(row.scores.values()), days * late_per_day / 100.0 * total_max)
 
 
+#: places a score is first cleaned to, so that float noise from summing (13.249999999999998)
+#: does not decide which way a half goes
+_NOISE_PLACES = decimal.Decimal("1e-9")
+
+
+def round_half_up(x: float, decimals: int) -> float:
+    """``x`` rounded to ``decimals`` places, a half always away from zero (12.75 -> 12.8,
+    13.25 -> 13.3, -0.25 -> -0.3), in decimal arithmetic; ``ValueError`` for a negative
+    ``decimals`` or a value that is not finite."""
+    if decimals < 0:
+        raise ValueError(f"decimals must be >= 0, got {decimals}")
+    if not math.isfinite(x):
+        raise ValueError(f"a mark must be a finite number, got {x!r}")
+    clean = decimal.Decimal(float(x)).quantize(_NOISE_PLACES, rounding=decimal.ROUND_HALF_EVEN)
+    step = decimal.Decimal(1).scaleb(-decimals)
+    return float(clean.quantize(step, rounding=decimal.ROUND_HALF_UP))
+
+
 def _naive_utc(when: dt.datetime | None) -> dt.datetime | None:
     """``when`` as a naive UTC datetime (nbgrader stores naive UTC)."""
     if when is None or when.tzinfo is None:
@@ -119,7 +140,7 @@ def write_all(rows: list[StudentGrades], maxima: dict[str, float], out: Path, *,
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     total_max = sum(maxima.values())
-    fmt = lambda x: format_score(round(x, decimals))  # noqa: E731
+    fmt = lambda x: format_score(round_half_up(x, decimals))  # noqa: E731
     canvas, moodle = [], []
     for r in rows:
         penalty = late_penalty(r, total_max, late_per_day, due)
