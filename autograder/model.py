@@ -192,6 +192,9 @@ class CellResult:
     #: another student whose numbers or option letters this wrong answer fits (instructors' report;
     #: the student's feedback says so only once hidden tests are revealed)
     fits_other: str = ""
+    #: what a choice or number item's cell typed (the literal it was judged on), else None: the
+    #: report's distractor tables map it back to the canonical options
+    answer: Any = None
 
 
 class AnswerShape(str, enum.Enum):

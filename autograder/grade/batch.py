@@ -304,7 +304,8 @@ def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
     return CellResult(work.student, work.src.name, test_id, name, score, points, status,
                       message, kind=kind, cases=[_kept(r, reveal) for r in records],
                       printed=printed, notes=notes + load_notes,
-                      seconds=run.seconds, code=code, fits_other=fits)
+                      seconds=run.seconds, code=code, fits_other=fits,
+                      answer=None if typed is NOT_TYPED else typed)
 
 
 #: What stands for the student's own text while hidden tests are not revealed.

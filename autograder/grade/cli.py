@@ -8,7 +8,8 @@
 ``SUBMITTED`` has nbgrader's layout, ``SUBMITTED/<student>/tripos2006/<notebook>.ipynb``. The
 grader refuses to run when the operating-system sandbox is unavailable (exit status 2, with
 why) unless ``--unsafe-no-isolation`` is given, which it announces loudly. Writes
-``OUT/grades.csv``, ``OUT/feedback/<student>/<notebook>.html``, ``OUT/report.html`` and keeps
+``OUT/grades.csv``, ``OUT/items.csv`` (:mod:`~autograder.outputs.items`),
+``OUT/feedback/<student>/<notebook>.html``, ``OUT/report.html`` and keeps
 nbgrader's gradebook and ``autograded/`` notebooks in step. Exit status 0 whenever the batch was
 graded, whatever the submissions did; 2 for a usage error (no such folder, no source notebooks,
 unreadable secret, no sandbox, a gradebook URL whose database driver is not installed, a
@@ -27,7 +28,7 @@ from pathlib import Path
 
 from ..isolation import UNSAFE_WARNING, IsolationUnavailable, Limits, Mode, probe
 from ..outputs import csv as csv_output
-from ..outputs import feedback, gradebook, report
+from ..outputs import feedback, gradebook, items, report
 from ..exercises import REGISTRY
 from ..outputs.gradebook_url import MissingDriver, resolve_db_url
 from ..outputs.similarity import reference_source
@@ -154,6 +155,12 @@ def main(args: argparse.Namespace) -> int:
 def _write_outputs(batch, sources, args) -> None:
     out: Path = args.out
     csv_output.write_csv(batch.results, out / "grades.csv")
+    try:
+        items.write_items_csv(items.item_statistics(items.responses(batch.results)),
+                              out / "items.csv")
+    except Exception as exc:  # noqa: BLE001 - grades.csv is written; the feedback follows
+        traceback.print_exc(limit=3)
+        print(f"warning: items.csv could not be written ({type(exc).__name__})", file=sys.stderr)
     feedback.write_all(batch.results, out / "feedback", reveal_hidden=args.reveal_hidden)
     try:
         report.write_report(batch.results, sources, out / "report.html",

@@ -1,10 +1,10 @@
 """``OUT/report.html``: what an instructor wants after a grading run, on one page.
 
 The score distribution per question (inline SVG histograms), the most-failed tests (by how many
-students lost points, and how), the submissions that could not be graded at all, similar
-solutions, answers that fit another student's own numbers (:mod:`.variants`), and a count of
-every status with its meaning. Unanswered cells count as lost points with their own status,
-never as grader failures.
+students lost points, and how), the item analysis (:mod:`.items_html`), the submissions that
+could not be graded at all, similar solutions, answers that fit another student's own numbers
+(:mod:`.variants`), and a count of every status with its meaning. Unanswered cells count as lost
+points with their own status, never as grader failures.
 """
 
 from __future__ import annotations
@@ -15,6 +15,8 @@ from pathlib import Path
 
 from ..model import STATUS_MEANING, CellKind, CellResult, SourceNotebook, Status
 from .html import e, page, write_page
+from .items_html import STYLE as ITEMS_STYLE
+from .items_html import section_html as items_html
 from .similarity import find_pasted_references, find_similar, render_section
 from .variants import section_html as own_numbers_html
 
@@ -104,10 +106,11 @@ def render(results: list[CellResult], sources: list[SourceNotebook],
             f"{sum(r.kind is not CellKind.MANUAL for r in results)} automatically graded cells. "
             "Written answers are marked in formgrader and are not included here.</p>"]
     body += _distributions(results, sources) + _most_failed_html(results)
+    body += [items_html(results)]
     body += _grader_errors_html(results) + _ungradeable_html(results)
     body += [similar_solutions_html(results, references, jobs), own_numbers_html(results)]
     body += _statuses_html(results)
-    return page("tripos2006: grading report", body, _STYLE)
+    return page("tripos2006: grading report", body, _STYLE + ITEMS_STYLE)
 
 
 def _distributions(results, sources) -> list[str]:
