@@ -3,9 +3,10 @@
     python -m autograder export --out DIR [--course ROOT] [--db-url URL] [--decimals N]
                                 [--due ISO] [--late-per-day PERCENT] [--allow-unmarked]
 
-Writes ``DIR/canvas.csv``, ``DIR/moodle.csv`` and ``DIR/grades-long.csv`` from nbgrader's
-gradebook (see :mod:`autograder.outputs.export`). Refuses (exit status 1, listing them) while
-written answers are unmarked, unless ``--allow-unmarked``. Exit status 2 for a usage error.
+Writes ``DIR/canvas.csv``, ``DIR/moodle.csv``, ``DIR/grades-long.csv`` and ``DIR/items.csv``
+(the item analysis of the final marks, written answers included) from nbgrader's gradebook
+(see :mod:`autograder.outputs.export`). Refuses (exit status 1, listing them) while written
+answers are unmarked, unless ``--allow-unmarked``. Exit status 2 for a usage error.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from pathlib import Path
 
 from .course import DEFAULT_COURSE_ROOT, default_db_url
 from .outputs.gradebook_url import MissingDriver, resolve_db_url
+from .exercises import REGISTRY
 from .grade.sources import default_sources, load_source
 from .outputs import export
 
@@ -58,8 +60,9 @@ def main(args: argparse.Namespace) -> int:
     except ValueError:
         print(f"error: --due must be an ISO 8601 date, got {args.due!r}", file=sys.stderr)
         return 2
+    sources = [load_source(p) for p in default_sources()]
     maxima = {s.name: sum(p for *_, p in s.graded) + sum(p for _, p in s.manual)
-              for s in map(load_source, default_sources())}
+              for s in sources}
     try:
         db_url = resolve_db_url(args.db_url or default_db_url(root))
     except (MissingDriver, ValueError) as exc:
@@ -79,8 +82,21 @@ def main(args: argparse.Namespace) -> int:
     try:
         paths = export.write_all(rows, maxima, args.out, decimals=args.decimals,
                                  late_per_day=args.late_per_day, due=due)
+        paths.append(export.write_items(rows, cell_kinds(sources), args.out))
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     print("exported: " + ", ".join(str(p) for p in paths), file=sys.stderr)
     return 0
+
+
+def cell_kinds(sources) -> dict[tuple[str, str], str]:
+    """``{(notebook, grade_id): kind}`` of every graded cell of ``sources`` (the gradebook names
+    an automatically graded cell by its test cell's grade_id)."""
+    kinds = {}
+    for s in sources:
+        for name, test_id, _ in s.graded:
+            kinds[(s.name, test_id)] = REGISTRY[name].kind if name in REGISTRY else "function"
+        for gid, _ in s.manual:
+            kinds[(s.name, gid)] = "manual"
+    return kinds

@@ -8,7 +8,9 @@
 - ``moodle.csv``: Moodle's "Import grades: CSV file": ``ID number``, ``First name``,
   ``Last name``, ``Email address``, one column per question, the late penalty and the total;
 - ``grades-long.csv``: the archive, one row per student, notebook and graded cell, with the
-  automatic and manual scores, extra credit, whether the cell was marked, and the comment.
+  automatic and manual scores, extra credit, whether the cell was marked, and the comment;
+- ``items.csv``: the item analysis of the final marks (:func:`write_items`; the columns and
+  definitions of :mod:`.items`), written answers included.
 
 A student's name, e-mail and LMS id come from nbgrader's student table (``nbgrader db student
 import`` fills it). Marks are rounded to ``decimals`` places, a half always up
@@ -32,6 +34,7 @@ from pathlib import Path
 
 from ..course import COURSE_ID
 from ..model import ASSIGNMENT, format_score
+from . import items
 
 
 @dataclass
@@ -167,3 +170,29 @@ def _write(path: Path, header: list[str], rows: list[list[str]]) -> None:
         w = csv.writer(f)
         w.writerow(header)
         w.writerows(rows)
+
+
+def item_responses(rows: list[StudentGrades],
+                   kinds: dict[tuple[str, str], str]) -> list[items.Response]:
+    """Every graded cell of the gradebook as an item response, on the final score (a marker's
+    score where there is one, else the automatic one; extra credit left out). ``kinds`` maps
+    ``(notebook, grade_id)`` to the cell's kind (``function``, ``choice``, ``value``,
+    ``manual``). A written answer not yet marked is no answer to its item (it counts 0 in the
+    rest score, as in the exported total)."""
+    out = []
+    for r in rows:
+        for c in r.cells:
+            kind = kinds.get((c["notebook"], c["grade_id"]), "")
+            score = None if c["marked"] == "no" else float(c["score"])
+            out.append(items.Response(r.student, c["notebook"], c["grade_id"], kind, score,
+                                      float(c["max_score"])))
+    return out
+
+
+def write_items(rows: list[StudentGrades], kinds: dict[tuple[str, str], str],
+                out: Path) -> Path:
+    """``out/items.csv``: :func:`.items.item_statistics` of the final marks, the columns of
+    ``grade``'s ``items.csv``."""
+    Path(out).mkdir(parents=True, exist_ok=True)
+    stats = items.item_statistics(item_responses(rows, kinds))
+    return items.write_items_csv(stats, Path(out) / "items.csv")

@@ -154,13 +154,16 @@ def group_size(n: int) -> int:
     return -(-27 * n // 100)
 
 
-def upper_lower(fraction, rest, students) -> float | None:
-    """Facility of the upper group minus that of the lower (``ceil(0.27 n)`` students each, by
-    rest score; ties by student id, the lower id first); None for fewer than 2 students."""
+def upper_lower(fraction, rest, students, k: int | None = None) -> float | None:
+    """Facility of the upper group minus that of the lower (``k`` students each, by default
+    ``ceil(0.27 n)``, by rest score; ties by student id, the lower id first); None for fewer
+    than 2 students."""
     n = len(students)
     if n < 2:
         return None
-    k = group_size(n)
+    k = group_size(n) if k is None else int(k)
+    if not 1 <= k <= n:
+        raise ValueError(f"a group of {k} students out of {n}")
     fraction, rest = np.asarray(fraction, float), np.asarray(rest, float)
     ids = np.asarray(students, dtype=object)
     by_id = np.argsort(ids, kind="stable")
