@@ -10,10 +10,11 @@ numbers, with a possibly unfair draw marked (:mod:`.item_variants`).
 
 from __future__ import annotations
 
+import ast
 from collections import defaultdict
 from collections.abc import Mapping
 
-from ..model import CellKind, CellResult, Status
+from ..model import CellKind, CellResult, SourceNotebook, Status
 from .html import e
 from .item_checks import DrawTest, draw_test, option_table
 from .item_variants import canonical_choice, choice_items, features
@@ -60,9 +61,10 @@ document.querySelectorAll('table.sortable').forEach(function (t) {
 """
 
 
-def section_html(results: list[CellResult],
+def section_html(results: list[CellResult], sources: list[SourceNotebook] = (),
                  attempts: Mapping[tuple[str, str, str], int | None] | None = None) -> str:
-    """The whole section (``attempts``: see :func:`.items.item_statistics`)."""
+    """The whole section; ``sources`` give the choice items' option texts, ``attempts`` see
+    :func:`.items.item_statistics`."""
     rows = responses(results)
     out = ["<section class='items' id='items' aria-labelledby='items-h'>",
            "<h2 id='items-h'>Items</h2>"]
@@ -80,7 +82,8 @@ def section_html(results: list[CellResult],
         f"discrimination below {DISCRIMINATION_LOW:g}: check the wording, the key and the "
         "cases. The same numbers are in <code>items.csv</code>.</p>")
     out += [table_html(stats, attempts is not None), plot_svg(stats), alpha_html(m)]
-    out += [distractors_html(results, m), draws_html(results), _SORT_JS, "</section>"]
+    out += [distractors_html(results, m, option_texts(sources)), draws_html(results), _SORT_JS,
+            "</section>"]
     return "\n".join(out)
 
 
@@ -186,8 +189,33 @@ def _answered(results: list[CellResult], kind: CellKind) -> dict[tuple[str, str,
     return by_item
 
 
-def distractors_html(results: list[CellResult], m: ScoreMatrix) -> str:
-    """One distractor table per choice item, in the canonical options."""
+def option_texts(sources: list[SourceNotebook]) -> dict[str, list[str]]:
+    """``{choice item: its options' texts in the canonical order}``, read from the source
+    notebooks' ``mine.options("name", [...])`` cells (literals only; others are skipped)."""
+    found = {}
+    for src in sources:
+        for cell in src.cells:
+            if cell.cell_type != "code" or ".options(" not in cell.source:
+                continue
+            try:
+                tree = ast.parse(cell.source)
+            except SyntaxError:
+                continue
+            for node in ast.walk(tree):
+                if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) \
+                        and node.func.attr == "options" and len(node.args) == 2:
+                    try:
+                        name, texts = ast.literal_eval(node.args[0]), ast.literal_eval(node.args[1])
+                    except ValueError:
+                        continue
+                    if isinstance(name, str) and isinstance(texts, (list, tuple)):
+                        found[name] = [str(t) for t in texts]
+    return found
+
+
+def distractors_html(results: list[CellResult], m: ScoreMatrix,
+                     texts: Mapping[str, list[str]] | None = None) -> str:
+    """One distractor table per choice item, in the canonical options (with their texts)."""
     keys = choice_items()
     out = ["<h3>Choice items: the options</h3><p class='note'>Students see the options in "
            "orders of their own; each answer is mapped back to the canonical options (as in "
@@ -204,6 +232,9 @@ def distractors_html(results: list[CellResult], m: ScoreMatrix) -> str:
         body = []
         for o in option_table(chosen, key, options, rest):
             label = f"({o.option})" if len(o.option) == 1 else o.option
+            k = "abcdefgh".find(o.option) if len(o.option) == 1 else -1
+            if 0 <= k < len((texts or {}).get(name, ())):
+                label += " " + _short(texts[name][k])
             mark = "<td>✓ key</td>" if o.key else "<td><span class='sr'>not the key</span></td>"
             pb = "—" if o.point_biserial is None else f"{o.point_biserial:+.2f}"
             mean = "—" if o.mean_rest is None else f"{o.mean_rest:.1f}"
@@ -217,6 +248,11 @@ def distractors_html(results: list[CellResult], m: ScoreMatrix) -> str:
                    "</th><th scope='col'>mean rest score</th><th scope='col'>point-biserial</th>"
                    f"<th scope='col'>note</th></tr></thead><tbody>{''.join(body)}</tbody></table>")
     return "\n".join(out)
+
+
+def _short(text: str, limit: int = 110) -> str:
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[:limit - 1] + "…"
 
 
 def draw_tests(results: list[CellResult]) -> list[tuple[str, str, str, DrawTest, bool]]:

@@ -106,7 +106,7 @@ def render(results: list[CellResult], sources: list[SourceNotebook],
             f"{sum(r.kind is not CellKind.MANUAL for r in results)} automatically graded cells. "
             "Written answers are marked in formgrader and are not included here.</p>"]
     body += _distributions(results, sources) + _most_failed_html(results)
-    body += [items_html(results)]
+    body += [items_html(results, sources)]
     body += _grader_errors_html(results) + _ungradeable_html(results)
     body += [similar_solutions_html(results, references, jobs), own_numbers_html(results)]
     body += _statuses_html(results)

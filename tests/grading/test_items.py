@@ -399,3 +399,86 @@ def test_the_section_is_accessible(klass):
     assert html.count("⚑ review") == sum(s.flag == "review" for s in items.item_statistics(
         items.responses(klass["results"])))
     assert "✓ key" in html and "aria-sort='none'" in html and "role='status'" in html
+
+
+def _cell(student, notebook, gid, score, top, marked="yes"):
+    return {"student": student, "notebook": notebook, "grade_id": gid, "score": str(score),
+            "max_score": str(top), "marked": marked}
+
+
+def test_export_joins_the_written_answers(tmp_path, sources):
+    """``export/items.csv``: the final marks, written answers included, the same columns; an
+    unmarked answer is no answer to its item but counts 0 in the rest score."""
+    from autograder.cli_export import cell_kinds
+    from autograder.outputs import export
+
+    kinds = cell_kinds(sources)
+    src = sources[0]
+    (name, test_id, _), (written, _) = src.graded[0], src.manual[0]
+    from autograder.exercises import REGISTRY
+    assert kinds[(src.name, test_id)] == REGISTRY[name].kind
+    assert kinds[(src.name, written)] == "manual"
+    rows = []
+    for i in range(40):
+        auto, manual = float(i % 4 == 0), (i % 10) / 2     # 0 .. 4.5 of 5
+        cells = [_cell(f"s{i:02d}", src.name, test_id, auto, 1),
+                 _cell(f"s{i:02d}", src.name, written, manual, 5, "no" if i == 39 else "yes"),
+                 _cell(f"s{i:02d}", "q2_nuclear", "test_x", float(i >= 20), 1)]
+        rows.append(export.StudentGrades(f"s{i:02d}", cells=cells))
+    path = export.write_items(rows, {**kinds, ("q2_nuclear", "test_x"): "value"}, tmp_path)
+    with open(path, newline="") as f:
+        got = {r["grade_id"]: r for r in csv.DictReader(f)}
+    assert list(next(iter(got.values()))) == list(items.ITEM_COLUMNS)
+    w = got[written]
+    assert (w["kind"], w["n"], w["max_score"]) == ("manual", "39", "5")
+    marks = [(i % 10) / 2 for i in range(39)]
+    assert float(w["facility"]) == pytest.approx(sum(marks) / 39 / 5, abs=1e-4)
+    rest = [float(i % 4 == 0) + float(i >= 20) for i in range(39)]
+    assert float(w["discrimination"]) == pytest.approx(sps.pearsonr(marks, rest)[0], abs=1e-4)
+    x = got["test_x"]
+    rest_x = [float(i % 4 == 0) + (0.0 if i == 39 else (i % 10) / 2) for i in range(40)]
+    assert float(x["discrimination"]) == pytest.approx(
+        sps.pearsonr([float(i >= 20) for i in range(40)], rest_x)[0], abs=1e-4)
+
+
+def test_grade_writes_items_csv_and_the_section(tmp_path, sources, monkeypatch):
+    """``python -m autograder grade`` on two students' q1: ``items.csv`` beside
+    ``grades.csv``, and the report's distractor table in the canonical options."""
+    import argparse
+
+    from gradingtools import SECRET, model_version, set_cell, write_nb
+
+    from autograder.grade import cli
+    from autograder.isolation import IsolationUnavailable
+
+    def probe():
+        raise IsolationUnavailable("not needed for this test")
+    monkeypatch.setattr(cli, "probe", probe)
+    src = sources[0]
+    for student, canonical in (("kim", "c"), ("lee", "a")):
+        shown = variants.displayed_letters("xray_pixel_meaning", canonical, 4, student)
+        nb = set_cell(model_version(src), "xray_pixel_meaning", f'xray_pixel_meaning = "{shown}"')
+        write_nb(tmp_path / "submitted" / student / "tripos2006" / f"{src.name}.ipynb", nb)
+    (tmp_path / "secret").write_bytes(SECRET + b"\n")
+    parser = argparse.ArgumentParser()
+    cli.add_arguments(parser)
+    args = parser.parse_args([str(tmp_path / "submitted"), "--out", str(tmp_path / "out"),
+                              "--secret-file", str(tmp_path / "secret"), "--no-gradebook",
+                              "--quiet", "--jobs", "1", "--timeout", "5", "--source",
+                              str(src.path.parent), "--unsafe-no-isolation"])
+    assert cli.main(args) == 0
+    with open(tmp_path / "out" / "items.csv", newline="") as f:
+        got = {(r["notebook"], r["grade_id"]): r for r in csv.DictReader(f)}
+    with open(tmp_path / "out" / "grades.csv", newline="") as f:
+        written = {(s.name, gid) for s in sources for gid, _ in s.manual}
+        auto = {(r["notebook"], r["grade_id"]) for r in csv.DictReader(f)
+                if r["student"] == "kim" and (r["notebook"], r["grade_id"]) not in written}
+    assert set(got) == auto
+    x = got[(src.name, "test_xray_pixel_meaning")]
+    assert (x["kind"], x["n"], x["facility"]) == ("choice", "2", "0.5000")
+    assert got[("q6_clipping", "test_clip_polygon")]["n"] == "0"     # not handed in
+    report = (tmp_path / "out" / "report.html").read_text()
+    table = report.split("xray_pixel_meaning (key c; 2 students)")[1].split("</table>")[0]
+    rows = {row.split("</th>")[0].split(">")[-1][:3]: row for row in table.split("<tr>")[2:]}
+    assert "✓ key" in rows["(c)"] and "<td class='num'>1</td>" in rows["(c)"]
+    assert "<td class='num'>1</td>" in rows["(a)"] and "<td class='num'>0</td>" in rows["(b)"]
