@@ -48,9 +48,22 @@ def canonical_choice(name: str, typed, student: str) -> str | None:
     options = known[1]
     try:
         shown = choice_letters(typed, options, name=name)
-        return variants.canonical_letters(name, shown, len(options), student)
+        order = _order(name, len(options), student)
     except (ChoiceFormatError, ValueError):
         return None
+    return "".join(sorted(variants.LETTERS[order[variants.LETTERS.index(c)]] for c in shown))
+
+
+@functools.lru_cache(maxsize=65536)
+def _order(name: str, n_options: int, student: str) -> tuple[int, ...]:
+    """:func:`course_lib.variants.option_order` (``order[k]``: the canonical index of the
+    option shown as letter ``k``), kept: a report maps each student's letters and key once."""
+    return variants.option_order(name, n_options, student)
+
+
+@functools.lru_cache(maxsize=8192)
+def _numbers(notebook: str, student: str):
+    return variants.variant(notebook, student)
 
 
 def _q1(v) -> dict[str, str]:
@@ -114,10 +127,11 @@ def features(name: str, notebook: str, student: str) -> dict[str, str]:
     kind = item_kind(name)
     try:
         if kind == "value" and notebook in FEATURES:
-            return FEATURES[notebook](variants.variant(notebook, student))
+            return FEATURES[notebook](_numbers(notebook, student))
         key = choice_items().get(name)
         if kind == "choice" and key is not None and len(key[0]) == 1:
-            shown = variants.displayed_letters(name, key[0], len(key[1]), student)
+            order = _order(name, len(key[1]), student)
+            shown = variants.LETTERS[order.index(variants.LETTERS.index(key[0]))]
             return {"key shown as": f"({shown})"}
     except ValueError:
         return {}

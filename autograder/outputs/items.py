@@ -28,6 +28,7 @@ import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -43,8 +44,7 @@ FACILITY_HIGH, FACILITY_LOW, DISCRIMINATION_LOW = 0.95, 0.2, 0.1
 _PLACES = 9
 
 
-@dataclass(frozen=True)
-class Response:
+class Response(NamedTuple):
     """One student's score on one item; ``score`` None: no answer to it (see the module)."""
 
     student: str
@@ -98,10 +98,11 @@ def responses(results: Iterable[CellResult]) -> list[Response]:
     or unreadable as a whole, and a grader error, are no answer to the item."""
     out = []
     for r in results:
-        if r.kind is CellKind.MANUAL:
+        if r.kind is CellKind.MANUAL or r.kind == "manual":
             continue
         none = r.whole_notebook or r.status is Status.GRADER_ERROR or r.score is None
-        out.append(Response(r.student, r.notebook, r.grade_id, CellKind(r.kind).value,
+        kind = r.kind.value if isinstance(r.kind, CellKind) else str(r.kind)
+        out.append(Response(r.student, r.notebook, r.grade_id, kind,
                             None if none else float(r.score), float(r.max_score)))
     return out
 
@@ -118,23 +119,28 @@ def score_matrix(rows: Iterable[Response]) -> ScoreMatrix:
             items[key] = len(items)
             kinds.append(r.kind)
             maxima.append(float(r.max_score))
-        if not (math.isfinite(r.max_score) and r.max_score >= 0):
-            raise ValueError(f"{r.notebook}/{r.grade_id}: max_score must be >= 0, got "
-                             f"{r.max_score!r}")
     students = sorted({r.student for r in rows})
     where = {s: i for i, s in enumerate(students)}
+    at = np.array([(where[r.student], items[(r.notebook, r.grade_id)]) for r in rows],
+                  dtype=np.intp).reshape(-1, 2)
+    flat = at[:, 0] * max(len(items), 1) + at[:, 1]
+    if len(np.unique(flat)) != len(flat):
+        k = int(np.flatnonzero(np.bincount(flat) > 1)[0])
+        (nb, gid), = [key for key, j in items.items() if j == k % len(items)]
+        raise ValueError(f"{students[k // len(items)]} has two rows for {nb}/{gid}")
+    bad = [r for r in rows if not (math.isfinite(r.max_score) and r.max_score >= 0)]
+    if bad:
+        raise ValueError(f"{bad[0].notebook}/{bad[0].grade_id}: max_score must be >= 0, got "
+                         f"{bad[0].max_score!r}")
+    score = np.array([np.nan if r.score is None else r.score for r in rows], float)
+    top = np.array(maxima)[at[:, 1]] if len(rows) else np.zeros(0)
+    wrong = ~np.isnan(score) & ~((score >= -1e-9) & (score <= top + 1e-9))
+    if wrong.any():
+        r = rows[int(np.flatnonzero(wrong)[0])]
+        raise ValueError(f"{r.student}, {r.notebook}/{r.grade_id}: score {r.score!r} is not "
+                         f"within [0, {float(r.max_score):g}]")
     scores = np.full((len(students), len(items)), np.nan)
-    seen = np.zeros(scores.shape, bool)
-    for r in rows:
-        i, j = where[r.student], items[(r.notebook, r.grade_id)]
-        if seen[i, j]:
-            raise ValueError(f"{r.student} has two rows for {r.notebook}/{r.grade_id}")
-        seen[i, j] = True
-        if r.score is not None:
-            if not (math.isfinite(r.score) and -1e-9 <= r.score <= maxima[j] + 1e-9):
-                raise ValueError(f"{r.student}, {r.notebook}/{r.grade_id}: score {r.score!r} is "
-                                 f"not within [0, {maxima[j]:g}]")
-            scores[i, j] = round(float(r.score), _PLACES)
+    scores[at[:, 0], at[:, 1]] = np.round(score, _PLACES)
     return ScoreMatrix(students, list(items), kinds, np.array(maxima), scores)
 
 
@@ -191,8 +197,13 @@ def item_statistics(rows: Iterable[Response],
     yet, so ``grade`` passes none; when given, each item also gets the median attempts to first
     full marks among the students who reached them.
     """
-    m = score_matrix(rows)
+    return matrix_statistics(score_matrix(rows), attempts)
+
+
+def matrix_statistics(m: ScoreMatrix, attempts: Mapping | None = None) -> list[ItemStats]:
+    """:func:`item_statistics` of a matrix already built."""
     out = []
+    totals = m.totals
     for j, (notebook, grade_id) in enumerate(m.items):
         answered = ~np.isnan(m.scores[:, j])
         top = float(m.max_scores[j])
@@ -200,7 +211,7 @@ def item_statistics(rows: Iterable[Response],
         stats = ItemStats(notebook, grade_id, m.kinds[j], top, n, None, None, None, "")
         if n and top > 0:
             frac = m.scores[answered, j] / top
-            rest = m.rest(j)[answered]
+            rest = np.round(totals - m.scores[:, j], _PLACES)[answered]
             ids = [s for s, a in zip(m.students, answered) if a]
             stats.facility = float(frac.mean())
             stats.discrimination = pearson(frac, rest)

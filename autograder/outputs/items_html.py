@@ -19,7 +19,7 @@ from .html import e
 from .item_checks import DrawTest, draw_test, option_table
 from .item_variants import canonical_choice, choice_items, features
 from .items import (DISCRIMINATION_LOW, FACILITY_HIGH, FACILITY_LOW, ItemStats, ScoreMatrix,
-                    alphas, item_statistics, responses, score_matrix)
+                    alphas, matrix_statistics, responses, score_matrix)
 
 #: Family-wise error rate of the fairness tests (Bonferroni over every test in the report).
 FAIRNESS_ALPHA = 0.05
@@ -71,7 +71,7 @@ def section_html(results: list[CellResult], sources: list[SourceNotebook] = (),
     if not rows:
         return "\n".join(out + ["<p>No automatically graded cells.</p></section>"])
     m = score_matrix(rows)
-    stats = item_statistics(rows, attempts)
+    stats = matrix_statistics(m, attempts)
     out.append(
         "<p class='note'>One row per automatically graded cell, over the students whose notebook "
         "was graded (<i>n</i>). <b>Facility</b>: mean score as a share of the marks. "
