@@ -31,6 +31,7 @@ outline-offset:2px}.items th[aria-sort=ascending] button::after{content:" \\25B2
 .items th[aria-sort=descending] button::after{content:" \\25BC"}.items caption{text-align:left;
 font-weight:600;padding:.3em 0}td.num{text-align:right;font-variant-numeric:tabular-nums}
 .flag{font-weight:600;color:#8a3b00}.sr{position:absolute;left:-9999px}
+.items tbody th{font-weight:normal}
 """
 
 _SORT_JS = """
@@ -163,7 +164,8 @@ def plot_svg(stats: list[ItemStats]) -> str:
             f"aria-label='{e(label)}'>{''.join(g)}</svg><figcaption class='note'>Facility "
             "against discrimination: circles need no review, triangles are marked for review; "
             "the shaded band is where good items lie."
-            + (f" {left_out} items without a discrimination are not drawn." if left_out else "")
+            + (f" Not drawn, without a discrimination: {left_out} item"
+               f"{'s' if left_out != 1 else ''}." if left_out else "")
             + "</figcaption></figure>")
 
 
@@ -251,7 +253,7 @@ def distractors_html(results: list[CellResult], m: ScoreMatrix,
 
 
 def _short(text: str, limit: int = 110) -> str:
-    text = " ".join(text.split())
+    text = " ".join(text.replace("$", "").split())     # the notebooks' LaTeX, read as text
     return text if len(text) <= limit else text[:limit - 1] + "…"
 
 
