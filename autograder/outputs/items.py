@@ -16,9 +16,9 @@ Every automatically graded cell (and, in ``export``, every written answer once m
 A row whose score is ``None`` is not an answer to its item: a notebook not handed in or
 unreadable as a whole, a grader error, a written answer not yet marked. It is left out of that
 item's statistics and counts 0 in the student's rest score (as in their total). Cronbach's alpha
-(:func:`cronbach_alpha`), per-option statistics of choice items (:func:`option_table`) and the
-test of a variant feature against the facility (:func:`draw_test`) are here too; everything is
-NumPy and the standard library, and never NaN: an undefined number is ``None`` (an empty cell).
+(:func:`cronbach_alpha`) is here too; a choice item's options and the fairness of the variants
+are in :mod:`.item_checks`. Everything is NumPy and the standard library, and never NaN: an
+undefined number is ``None`` (an empty cell).
 """
 
 from __future__ import annotations
@@ -204,6 +204,7 @@ def matrix_statistics(m: ScoreMatrix, attempts: Mapping | None = None) -> list[I
     """:func:`item_statistics` of a matrix already built."""
     out = []
     totals = m.totals
+    tries = _attempts_by_item(attempts) if attempts is not None else None
     for j, (notebook, grade_id) in enumerate(m.items):
         answered = ~np.isnan(m.scores[:, j])
         top = float(m.max_scores[j])
@@ -217,19 +218,26 @@ def matrix_statistics(m: ScoreMatrix, attempts: Mapping | None = None) -> list[I
             stats.discrimination = pearson(frac, rest)
             stats.upper_lower = upper_lower(frac, rest, ids)
             stats.flag = review_flag(stats.facility, stats.discrimination)
-        if attempts is not None:
-            _add_attempts(stats, attempts)
+        if tries is not None:
+            reached = tries.get((notebook, grade_id), [])
+            stats.full_marks = len(reached)
+            stats.attempts = float(np.median(reached)) if reached else None
         out.append(stats)
     return out
 
 
-def _add_attempts(stats: ItemStats, attempts: Mapping) -> None:
-    tries = [int(a) for (s, nb, gid), a in attempts.items()
-             if nb == stats.notebook and gid == stats.grade_id and a is not None]
-    if any(t < 1 for t in tries):
-        raise ValueError(f"{stats.notebook}/{stats.grade_id}: attempts must be >= 1")
-    stats.full_marks = len(tries)
-    stats.attempts = float(np.median(tries)) if tries else None
+def _attempts_by_item(attempts: Mapping) -> dict[tuple[str, str], list[int]]:
+    """``{(notebook, grade_id): [attempts to first full marks of each student who got them]}``;
+    ``ValueError`` for a count below 1."""
+    out: dict[tuple[str, str], list[int]] = {}
+    for (student, nb, gid), a in attempts.items():
+        if a is None:
+            continue
+        if int(a) != a or a < 1:
+            raise ValueError(f"{student}, {nb}/{gid}: attempts must be a whole number >= 1, "
+                             f"got {a!r}")
+        out.setdefault((nb, gid), []).append(int(a))
+    return out
 
 
 def cronbach_alpha(scores) -> float | None:

@@ -298,6 +298,17 @@ def test_attempts_to_full_marks_when_recorded(klass):
     assert stats[0].attempts is None and stats[0].full_marks == 0
     assert stats[1].attempts == 3.0 and stats[1].full_marks == 1
     assert items.item_statistics(rows)[1].attempts is None      # no grading service: none
+    with pytest.raises(ValueError, match="attempts"):
+        items.item_statistics(rows, {(rows[0].student, rows[0].notebook, rows[0].grade_id): 0})
+    rows = [items.Response(f"s{i}", "q", "t", "function", 1.0, 1.0) for i in range(5)]
+    stats = items.item_statistics(rows, {(f"s{i}", "q", "t"): a for i, a in
+                                         enumerate([1, 4, 2, None, 7])})
+    assert (stats[0].attempts, stats[0].full_marks) == (3.0, 4)    # median of 1, 2, 4, 7
+    results = klass["results"][:FILLERS + 5]
+    assert "median attempts to full marks" not in items_html.section_html(results)
+    shown = items_html.section_html(results, attempts={(r.student, r.notebook, r.grade_id): 2
+                                                       for r in results})
+    assert "median attempts to full marks</button>" in shown and ">2.0</td>" in shown
 
 
 @pytest.mark.parametrize("df", [1, 2, 3, 4, 5, 7, 10])
