@@ -98,13 +98,18 @@ def responses(results: Iterable[CellResult]) -> list[Response]:
     or unreadable as a whole, and a grader error, are no answer to the item."""
     out = []
     for r in results:
-        if r.kind is CellKind.MANUAL or r.kind == "manual":
+        kind = _KIND_NAMES.get(r.kind) or str(r.kind)
+        if kind == "manual":
             continue
-        none = r.whole_notebook or r.status is Status.GRADER_ERROR or r.score is None
-        kind = r.kind.value if isinstance(r.kind, CellKind) else str(r.kind)
+        none = r.whole_notebook or r.status is _GRADER_ERROR or r.score is None
         out.append(Response(r.student, r.notebook, r.grade_id, kind,
                             None if none else float(r.score), float(r.max_score)))
     return out
+
+
+# looked up once: an enum member's ``.value`` costs a descriptor call per row
+_KIND_NAMES = {k: k.value for k in CellKind}
+_GRADER_ERROR = Status.GRADER_ERROR
 
 
 def score_matrix(rows: Iterable[Response]) -> ScoreMatrix:
