@@ -9,6 +9,8 @@ points with their own status, never as grader failures.
 
 from __future__ import annotations
 
+import sys
+import traceback
 from collections import Counter, defaultdict
 from collections.abc import Mapping
 from pathlib import Path
@@ -106,11 +108,23 @@ def render(results: list[CellResult], sources: list[SourceNotebook],
             f"{sum(r.kind is not CellKind.MANUAL for r in results)} automatically graded cells. "
             "Written answers are marked in formgrader and are not included here.</p>"]
     body += _distributions(results, sources) + _most_failed_html(results)
-    body += [items_html(results, sources)]
+    body += [_items_section(results, sources)]
     body += _grader_errors_html(results) + _ungradeable_html(results)
     body += [similar_solutions_html(results, references, jobs), own_numbers_html(results)]
     body += _statuses_html(results)
     return page("tripos2006: grading report", body, _STYLE + ITEMS_STYLE)
+
+
+def _items_section(results, sources) -> str:
+    """The item analysis; should it fail, the rest of the report is still written."""
+    try:
+        return items_html(results, sources)
+    except Exception as exc:  # noqa: BLE001 - one section never costs the whole page
+        traceback.print_exc(limit=3)
+        print(f"warning: the report's item analysis failed ({type(exc).__name__})",
+              file=sys.stderr)
+        return (f"<section id='items'><h2>Items</h2><p>The item analysis failed "
+                f"({e(type(exc).__name__)}); the traceback is in the grading log.</p></section>")
 
 
 def _distributions(results, sources) -> list[str]:

@@ -493,3 +493,14 @@ def test_grade_writes_items_csv_and_the_section(tmp_path, sources, monkeypatch):
     rows = {row.split("</th>")[0].split(">")[-1][:3]: row for row in table.split("<tr>")[2:]}
     assert "✓ key" in rows["(c)"] and "<td class='num'>1</td>" in rows["(c)"]
     assert "<td class='num'>1</td>" in rows["(a)"] and "<td class='num'>0</td>" in rows["(b)"]
+
+
+def test_a_failing_item_analysis_costs_only_its_section(klass, monkeypatch, capsys):
+    from autograder.outputs import report
+
+    def broken(*_a, **_k):
+        raise RuntimeError("boom")
+    monkeypatch.setattr(report, "items_html", broken)
+    page = report.render(klass["results"][:FILLERS + 5], [])
+    assert "The item analysis failed (RuntimeError)" in page and "Statuses</h2>" in page
+    assert "item analysis failed" in capsys.readouterr().err
