@@ -452,6 +452,7 @@ def test_export_joins_the_written_answers(tmp_path, sources):
         sps.pearsonr([float(i >= 20) for i in range(40)], rest_x)[0], abs=1e-4)
 
 
+@pytest.mark.slow
 def test_grade_writes_items_csv_and_the_section(tmp_path, sources, monkeypatch):
     """``python -m autograder grade`` on two students' q1: ``items.csv`` beside
     ``grades.csv``, and the report's distractor table in the canonical options."""
@@ -504,3 +505,59 @@ def test_a_failing_item_analysis_costs_only_its_section(klass, monkeypatch, caps
     page = report.render(klass["results"][:FILLERS + 5], [])
     assert "The item analysis failed (RuntimeError)" in page and "Statuses</h2>" in page
     assert "item analysis failed" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_export_items_from_a_real_gradebook(tmp_path, sources, template_gradebook, monkeypatch):
+    """Grade three students' q1 into nbgrader's gradebook, mark a written answer for two of
+    them, export: ``export/items.csv`` has the written answer's row on the markers' scores (the
+    unmarked one left out of its ``n``) and the automatic rows on the final scores."""
+    import argparse
+    import shutil
+
+    from gradingtools import SECRET, model_version, write_nb
+    from nbgrader.api import Gradebook
+
+    from autograder import cli_export
+    from autograder.grade import cli
+    from autograder.isolation import IsolationUnavailable
+
+    def probe():
+        raise IsolationUnavailable("not needed for this test")
+    monkeypatch.setattr(cli, "probe", probe)
+    src = sources[0]
+    students = ("ann", "ben", "cat")
+    for student in students:
+        write_nb(tmp_path / "submitted" / student / "tripos2006" / f"{src.name}.ipynb",
+                 model_version(src))
+    db = tmp_path / "gradebook.db"
+    shutil.copy(template_gradebook, db)
+    (tmp_path / "secret").write_bytes(SECRET + b"\n")
+    parser = argparse.ArgumentParser()
+    cli.add_arguments(parser)
+    assert cli.main(parser.parse_args([
+        str(tmp_path / "submitted"), "--out", str(tmp_path / "out"), "--secret-file",
+        str(tmp_path / "secret"), "--db-url", f"sqlite:///{db}", "--quiet", "--jobs", "1",
+        "--timeout", "5", "--source", str(src.path.parent), "--unsafe-no-isolation"])) == 0
+    written, top = src.manual[0]
+    with Gradebook(f"sqlite:///{db}", course_id="4f9") as gb:
+        for student, mark in (("ann", top), ("ben", 0.5 * top)):
+            grade = gb.find_grade(written, src.name, "tripos2006", student)
+            grade.manual_score, grade.needs_manual_grade = mark, False
+        gb.db.commit()
+    parser = argparse.ArgumentParser()
+    cli_export.add_arguments(parser)
+    assert cli_export.main(parser.parse_args([
+        "--out", str(tmp_path / "export"), "--course", str(tmp_path), "--db-url",
+        f"sqlite:///{db}", "--allow-unmarked"])) == 0
+    with open(tmp_path / "export" / "items.csv", newline="") as f:
+        reader = csv.DictReader(f)
+        assert tuple(reader.fieldnames) == items.ITEM_COLUMNS
+        got = {(r["notebook"], r["grade_id"]): r for r in reader}
+    row = got[(src.name, written)]
+    assert (row["kind"], row["n"]) == ("manual", "2")
+    assert float(row["facility"]) == pytest.approx(0.75, abs=1e-4)
+    name, test_id, points = src.graded[0]
+    auto = got[(src.name, test_id)]
+    assert auto["n"] == "3" and float(auto["facility"]) == pytest.approx(1.0, abs=1e-4)
+    assert auto["discrimination"] == "" and auto["flag"] == "review"    # the model earns all
