@@ -90,7 +90,8 @@ def section_html(results: list[CellResult], sources: list[SourceNotebook] = (),
 
 def _cell(x: float | None, places: int = 2) -> str:
     if x is None:
-        return "<td class='num' data-v=''><span aria-label='none'>—</span></td>"
+        return ("<td class='num' data-v=''><span aria-hidden='true'>—</span>"
+                "<span class='sr'>none</span></td>")
     return f"<td class='num' data-v='{x:.6f}'>{x:.{places}f}</td>"
 
 
