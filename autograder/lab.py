@@ -41,12 +41,12 @@ from pathlib import Path
 
 from .course import (
     ASSIGNMENT,
-    CELL_TIMEOUT,
-    COURSE_ID,
     DEFAULT_COURSE_ROOT,
     nbgrader_env,
     prepare_course,
+    student_config_text,
 )
+from .formgrader import EXTENSION as FORMGRADER_GUARD
 from .student_bundle import (
     STUDENT_DISABLED_PLUGINS,
     STUDENT_DISABLED_SERVER_EXTENSIONS,
@@ -85,7 +85,8 @@ def page_config(role: str) -> dict:
 def server_config(role: str) -> dict:
     """The ``jupyter_server_config.json`` of a launch (server extensions on or off)."""
     if role == "instructor":
-        return {}
+        # the Formgrader's buttons go through the course's guard (autograder/formgrader/)
+        return {"ServerApp": {"jpserver_extensions": {FORMGRADER_GUARD: True}}}
     off = {ext: False for ext in STUDENT_DISABLED_SERVER_EXTENSIONS}
     return {"ServerApp": {"jpserver_extensions": off}}
 
@@ -102,11 +103,7 @@ def write_launch_config(config_dir: Path, role: str, course_root: Path) -> Path:
         # the Assignments panel reads nbgrader config from the Jupyter config path: point it at
         # the course's local exchange instead of /srv/nbgrader/exchange
         (config_dir / "nbgrader_config.py").write_text(
-            "c = get_config()  # noqa: F821\n"
-            f"c.CourseDirectory.course_id = {COURSE_ID!r}\n"
-            f"c.Exchange.root = {str(Path(course_root).resolve() / 'exchange')!r}\n"
-            f"c.Execute.timeout = {CELL_TIMEOUT}  # the Validate button\n"
-        )
+            student_config_text(Path(course_root) / "exchange"))
     return config_dir
 
 
