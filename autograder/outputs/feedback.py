@@ -15,13 +15,15 @@ leak. Choice answers are never revealed.
 from __future__ import annotations
 
 import dataclasses
+import html
+import re
 import sys
 import traceback
 from pathlib import Path
 
 import numpy as np
 
-from ..model import VERDICT_WORDS, CaseRecord, CellKind, CellResult, Verdict
+from ..model import VERDICT_WORDS, CaseRecord, CellKind, CellResult, Status, Verdict
 from .html import e, e_clipped, page, plot_data, svg_lines, value_text, write_page
 
 _STYLE = """
@@ -99,9 +101,10 @@ def _render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: 
 
 
 def _cell_html(r: CellResult, reveal: bool) -> str:
+    if r.kind is CellKind.MANUAL:
+        return "\n".join([_written_head(r)] + _outputs(r))
     score = "–" if r.score is None else f"{round(r.score, 2):g}"
-    title = r.name if r.kind is not CellKind.MANUAL else f"{r.name} (written answer)"
-    parts = [f"<h2>{e(title)} <span class='badge {e(r.status.value)}'>{e(r.status.value)}"
+    parts = [f"<h2>{e(r.name)} <span class='badge {e(r.status.value)}'>{e(r.status.value)}"
              f"</span> <small>{score} / {r.max_score:g}</small></h2>",
              f"<p class='msg'>{e(r.message)}</p>"]
     if r.kind is CellKind.FUNCTION and r.cases:
@@ -111,6 +114,55 @@ def _cell_html(r: CellResult, reveal: bool) -> str:
           and r.cases[0].verdict is not Verdict.PASS):
         parts.append("<p class='note'>See the model answer in the released solutions.</p>")
     return "\n".join(parts + _outputs(r))
+
+
+#: One written answer's heading, as :func:`with_marks` finds it again in a written page.
+_WRITTEN = re.compile(r"<div class='written' data-grade-id='([^']*)'>.*?</div><!--/written-->",
+                      re.S)
+
+
+def _written_head(r: CellResult) -> str:
+    """A written answer's heading: waiting for its marker, or 0 when left blank.
+
+    The grader gives a written answer no mark of its own, so the page says who does; the
+    hand-back (:func:`with_marks`) puts the marker's mark in its place, so one page never
+    shows a mark in its table and "not marked" below it.
+    """
+    if r.status is Status.MANUAL:
+        badge, mark = "marked by hand", f"out of {r.max_score:g}"
+        msg = "A marker gives this answer its mark and comment."
+    else:
+        badge, mark = r.status.value, f"{round(r.score or 0.0, 2):g} / {r.max_score:g}"
+        msg = r.message
+    return _written_div(r.name, badge, r.status.value, mark, msg)
+
+
+def _written_div(grade_id: str, badge: str, css: str, mark: str, msg: str) -> str:
+    return (f"<div class='written' data-grade-id='{e(grade_id)}'><h2>{e(grade_id)} (written "
+            f"answer) <span class='badge {e(css)}'>{e(badge)}</span> <small>{e(mark)}</small>"
+            f"</h2><p class='msg'>{e(msg)}</p></div><!--/written-->")
+
+
+def with_marks(page_html: str, marks: dict[str, tuple[float, float, bool]]) -> str:
+    """A grader's page with each written answer's heading showing the gradebook's mark.
+
+    ``marks``: ``{grade_id: (score, max_score, marked)}``. An answer still waiting for its
+    marker says so; one marked shows its mark (the comment is in the hand-back's table).
+    """
+    def head(match: re.Match) -> str:
+        gid = html.unescape(match.group(1))
+        if gid not in marks:
+            return match.group(0)
+        score, max_score, marked = marks[gid]
+        if "<span class='badge unanswered'>" in match.group(0) and marked and score == 0:
+            return match.group(0)                 # left blank: 0, with the grader's reason
+        if not marked:
+            return _written_div(gid, "not marked yet", "manual", f"out of {max_score:g}",
+                                "A marker has not marked this answer yet.")
+        return _written_div(gid, "marked", "ok", f"{round(score, 2):g} / {max_score:g}",
+                            "Marked by hand: the marker's comment is in the table above.")
+
+    return _WRITTEN.sub(head, page_html)
 
 
 def _visible_html(visible: list[CaseRecord]) -> list[str]:

@@ -30,6 +30,7 @@ from pathlib import Path
 
 from ..course import COURSE_ID, run_nbgrader
 from ..model import ASSIGNMENT, format_score
+from .feedback import with_marks
 from .gradebook import CARRIED_FILES
 from .html import e, page
 
@@ -106,7 +107,9 @@ def render(marks: NotebookMarks, grader_page: str | None) -> str:
     style = ""
     body = ["<p class='note'>The automatic tests' results are not available.</p>"]
     if grader_page:
-        found = _BODY.search(grader_page)
+        written = {m.grade_id: (m.score, m.max_score, m.marked) for m in marks.marks
+                   if m.written}
+        found = _BODY.search(with_marks(grader_page, written))
         style = "".join(_STYLE_TAG.findall(grader_page))
         body = ["<h2>Automatic tests, case by case</h2>", found.group(1) if found else ""]
     return page(f"{marks.notebook}: feedback for {marks.student}", head + rows + body, style)
