@@ -34,9 +34,11 @@ import json
 import os
 import secrets
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 from .course import (
@@ -189,6 +191,21 @@ def launch_environment(
     return python, env
 
 
+def wait_until_listening(proc: subprocess.Popen, ip: str, port: int, timeout: float = 600,
+                         poll: float = 0.25) -> bool:
+    """Wait until the server accepts connections on ``(ip, port)``: True; False when the
+    process ended first or ``timeout`` seconds passed (the URL is printed only once it works)."""
+    host = "127.0.0.1" if ip in ("", "0.0.0.0", "localhost") else ("::1" if ip == "::" else ip)
+    deadline = time.monotonic() + timeout
+    while proc.poll() is None and time.monotonic() < deadline:
+        try:
+            with socket.create_connection((host, port), timeout=2):
+                return True
+        except OSError:
+            time.sleep(poll)
+    return False
+
+
 def _interrupt(signum, frame):
     raise KeyboardInterrupt
 
@@ -232,10 +249,15 @@ def main(args: argparse.Namespace) -> int:
         if args.role == "student" and args.student_env is None:
             view += ("\n  (preview in the instructors' environment: course_lib sources are "
                      "readable here; `make lab` opens the students' own environment)")
-        print(f"\n4F9 {view}\n  {url}\n", flush=True)
         # one Ctrl-C (or a SIGTERM to this launcher) stops JupyterLab without its y/n prompt
         signal.signal(signal.SIGTERM, _interrupt)
         try:
+            print(f"4F9: starting JupyterLab on port {args.port}...", file=sys.stderr, flush=True)
+            if wait_until_listening(proc, args.ip, args.port):
+                print(f"\n4F9 {view}\n  {url}\n", flush=True)
+            elif proc.poll() is None:
+                print(f"warning: JupyterLab does not answer on port {args.port} yet; try\n"
+                      f"  {url}", file=sys.stderr, flush=True)
             return proc.wait()
         except KeyboardInterrupt:
             proc.terminate()
