@@ -76,3 +76,11 @@ def test_a_blank_written_answer_keeps_its_zero_and_reason():
     grader = feedback.render("ann", "q1_imaging", rows(Status.UNANSWERED), reveal_hidden=False)
     page = text_of(handback.render(marks(0.0, True), grader))
     assert "left blank: 0" in page and page.count("0 / 6") == 2, page
+
+
+def test_a_comment_is_prose_at_the_pages_size():
+    """Not a <pre> in the table's smaller font; its line breaks kept; escaped."""
+    grader = feedback.render("ann", "q1_imaging", rows(), reveal_hidden=False)
+    page = handback.render(marks(4.5, True, "Line one <b>\nline two."), grader)
+    assert "<td class='comment'>Line one &lt;b&gt;\nline two.</td>" in page
+    assert re.search(r"td\.comment\{white-space:pre-wrap;[^}]*font-size:1\.1em", page)

@@ -60,3 +60,24 @@ def test_the_students_config_names_the_courses_exchange(tmp_path):
     config = PyFileConfigLoader(path.name, str(path.parent)).load_config()
     assert config.Exchange.root == str((tmp_path / "exchange").resolve())
     assert config.CourseDirectory.course_id == "4f9"
+
+
+def test_a_choice_answer_is_shown_in_the_markers_letters():
+    """The student's right answer, in their letters, maps to the canonical key (the
+    instructors' order); every one of their letters maps to a different option."""
+    import re
+
+    from autograder.exercises import REGISTRY
+    from autograder.outputs.choices import choice_legend
+
+    choices = [ex for ex in REGISTRY.values() if ex.kind == "choice"]
+    assert choices
+    for ex in choices:
+        for student in ("ab123", "xy987", "cd456"):
+            legend = choice_legend(ex.name, student, ex.key_for(student).upper())
+            mapped = re.findall(r"their \((\w)\) is \((\w)\) here", legend)
+            assert [a for a, _ in mapped] == list("abcdefgh"[:len(ex.options)])
+            assert sorted(b for _, b in mapped) == sorted(ex.options)
+            answer = re.search(r"their answer '[^']*' is (.*) here$", legend).group(1)
+            assert "".join(re.findall(r"\((\w)\)", answer)) == ex.key_for(None), legend
+    assert choice_legend("no_such_item", "ab123") == ""
