@@ -3,9 +3,10 @@
 release → two students fetch, answer and submit with the commands the README gives students
 (``course/for-students/nbgrader_config.py`` copied to ``~/.jupyter/``, then nbgrader's own
 ``fetch_assignment`` and ``submit``, each with a ``HOME`` of their own; ``--student`` stands for
-each student's own Unix login, since one account runs them all here) → ``nbgrader collect`` → ``python -m autograder
-grade`` → written answers marked (one in the Formgrader, in Chromium, the README's click path;
-the rest through nbgrader's Gradebook API, as the Formgrader stores them) →
+each student's own Unix login, since one account runs them all here) → ``nbgrader collect`` →
+``python -m autograder grade`` → written answers marked (one in the Formgrader, in Chromium,
+the README's click path; the rest through nbgrader's Gradebook API, as the Formgrader stores
+them) →
 re-grade with ``--reveal-hidden`` (marks, comments and flags intact) → ``python -m autograder
 feedback`` → each student's ``nbgrader fetch_feedback`` → ``python -m autograder export``.
 
