@@ -88,17 +88,17 @@ hub: $(STAMP) hub-deps wheel-deps sandbox-deps
 
 ## test: the whole suite (library, notebooks, grading bank, browser): about 17 minutes on 2 cores
 test: $(STAMP) browser-deps sandbox-deps wheel-deps postgres-deps hub-deps
-	@echo "make test: the whole suite, about 17 minutes on 2 cores (one dot per test; make test-fast: 2 minutes)"
+	@echo "make test: the whole suite, about 17 minutes on 2 cores (one dot per test; make test-fast: 2-3 minutes)"
 	$(BIN)/python -m pytest -n 2 --dist loadgroup -q
 
 ## test-fast: the library against its oracles, the judging, the notebooks' contract and their
-## visible (and hidden) tests run in each source notebook, ruff: about 2 minutes on 2 cores
+## visible (and hidden) tests run in each source notebook, ruff: 2-3 minutes on 2 cores
 FAST_TESTS := tests/course_lib tests/grading/test_judging.py tests/grading/test_handback_page.py \
               tests/notebooks/test_contract.py tests/notebooks/test_q1_q2_facts.py \
               tests/notebooks/test_q4_items.py tests/notebooks/test_q5_q6_items.py \
               tests/notebooks/test_execute_sources.py tests/test_lint.py
 test-fast: $(STAMP)
-	@echo "make test-fast: library, judging, notebooks (about 2 minutes; make test runs everything)"
+	@echo "make test-fast: library, judging, notebooks (2-3 minutes; make test runs everything)"
 	$(BIN)/python -m pytest -n 2 --dist loadgroup -q $(FAST_TESTS)
 
 ## bench: benchmarks against peers measured in the same run (writes benchmarks/results.md)
