@@ -14,6 +14,8 @@ from pathlib import Path
 from jupyter_server.utils import url_path_join
 from nbgrader.server_extensions.formgrader.base import (BaseApiHandler, check_notebook_dir,
                                                         check_xsrf)
+from nbgrader.server_extensions.formgrader.handlers import (ManageAssignmentsHandler,
+                                                            ManageSubmissionsHandler)
 from tornado import web
 
 #: What replaces each refused button, in the words the instructor needs.
@@ -119,8 +121,46 @@ class GuardedReleaseFeedback(BaseApiHandler):
         self.write(json.dumps(self.api.release_feedback(assignment_id, student_id)))
 
 
+#: The buttons the course refuses are hidden on nbgrader's pages, and a note says what to run.
+PAGE_STYLE = ("<style>td.assign a, td.autograde a, td.generate-feedback a {display: none}"
+              " .course-4f9 code {font-size: 1em}</style>")
+PAGE_NOTE = (
+    "<div class='alert alert-info course-4f9' role='note'><b>4F9:</b> the course's commands "
+    "replace three of nbgrader's buttons (hidden here): the student version is made by "
+    "<code>python -m autograder release</code>, submissions are graded by <code>python -m "
+    "autograder grade course/submitted --out grading/</code>, and feedback is written and "
+    "released by <code>python -m autograder feedback --grading grading/</code> (nbgrader's "
+    "would hand the marker's rubric to students). Release, Collect and Release Feedback are "
+    "nbgrader's, behind the course's checks.</div>")
+
+
+def with_course_note(page: str) -> str:
+    """nbgrader's page with the course's style in its head and its note above the content."""
+    page = page.replace("</head>", PAGE_STYLE + "</head>", 1)
+    found = [i for i in (page.find('<div class="panel-group"'), page.find("<table")) if i >= 0]
+    at = min(found) if found else (page.find("<body>") + len("<body>") if "<body>" in page else 0)
+    return page[:at] + PAGE_NOTE + page[at:]
+
+
+class CourseManageAssignments(ManageAssignmentsHandler):
+    """nbgrader's Manage Assignments page with the course's note, its refused buttons hidden."""
+
+    def render(self, name, **ns):
+        return with_course_note(super().render(name, **ns))
+
+
+class CourseManageSubmissions(ManageSubmissionsHandler):
+    """nbgrader's Manage Submissions page with the course's note, Autograde and Generate
+    Feedback hidden."""
+
+    def render(self, name, **ns):
+        return with_course_note(super().render(name, **ns))
+
+
 #: (URL under the server's base URL, handler, its arguments): nbgrader's own URLs.
 ROUTES = [
+    (r"/formgrader/manage_assignments/?", CourseManageAssignments, {}),
+    (r"/formgrader/manage_submissions/([^/]+)/?", CourseManageSubmissions, {}),
     (r"/formgrader/api/assignment/([^/]+)/assign", Refused, {"action": "assign"}),
     (r"/formgrader/api/assignment/([^/]+)/release", GuardedRelease, {}),
     (r"/formgrader/api/assignment/([^/]+)/generate_feedback", Refused,
