@@ -11,7 +11,7 @@ PORT   ?= 8888
 # make lab: the students' own environment (their wheel only, none of this repository's sources)
 STUDENT_VENV := .venv-student
 
-.PHONY: lab instructor test test-fast bench browser-deps sandbox-deps wheel-deps postgres-deps \
+.PHONY: lab instructor test test-fast bench browser-deps sandbox-deps wheel-deps postgres-deps mathjax-deps \
         hub hub-deps clean
 
 $(STAMP): pyproject.toml
@@ -26,7 +26,7 @@ lab: $(STAMP) wheel-deps
 	$(BIN)/python -m autograder lab --role student --student-env $(STUDENT_VENV) --port $(PORT)
 
 ## instructor: open JupyterLab on the nbgrader sources, with the formgrader
-instructor: $(STAMP)
+instructor: $(STAMP) mathjax-deps
 	$(BIN)/python -m autograder lab --role instructor --port $(PORT)
 
 ## browser-deps: Debian's headless Chromium for the browser tests (never a downloaded browser)
@@ -36,6 +36,16 @@ browser-deps:
 	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium >/dev/null 2>&1) \
 	      || echo "warning: could not install chromium; browser tests will be skipped"; \
 	  else echo "warning: not root, cannot apt-get install chromium; browser tests will be skipped"; fi; \
+	fi
+
+## mathjax-deps: Debian's MathJax 2, which the Formgrader serves itself (LaTeX in the marker's
+## pages without a CDN); without it the pages ask the CDN, as nbgrader's do
+mathjax-deps:
+	@if [ ! -f /usr/share/javascript/mathjax/MathJax.js ]; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libjs-mathjax >/dev/null 2>&1) \
+	      || echo "warning: could not install libjs-mathjax; the Formgrader will load MathJax from its CDN"; \
+	  else echo "warning: not root, cannot apt-get install libjs-mathjax; the Formgrader will load MathJax from its CDN"; fi; \
 	fi
 
 ## sandbox-deps: Debian's bubblewrap, the grading sandbox (autograder/isolation)
@@ -87,7 +97,7 @@ hub: $(STAMP) hub-deps wheel-deps sandbox-deps
 	$(BIN)/python deploy/hub.py --state $(HUB_STATE) up --port $(HUB_PORT) --ip $(HUB_IP)
 
 ## test: the whole suite (library, notebooks, grading bank, browser): about 17 minutes on 2 cores
-test: $(STAMP) browser-deps sandbox-deps wheel-deps postgres-deps hub-deps
+test: $(STAMP) browser-deps sandbox-deps wheel-deps postgres-deps hub-deps mathjax-deps
 	@echo "make test: the whole suite, about 17 minutes on 2 cores (one dot per test; make test-fast: 2-3 minutes)"
 	$(BIN)/python -m pytest -n 2 --dist loadgroup -q
 

@@ -9,13 +9,15 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 from pathlib import Path
 
 from jupyter_server.utils import url_path_join
 from nbgrader.server_extensions.formgrader.base import (BaseApiHandler, check_notebook_dir,
                                                         check_xsrf)
 from nbgrader.server_extensions.formgrader.handlers import (ManageAssignmentsHandler,
-                                                            ManageSubmissionsHandler)
+                                                            ManageSubmissionsHandler,
+                                                            SubmissionHandler)
 from tornado import web
 
 #: What replaces each refused button, in the words the instructor needs.
@@ -157,10 +159,38 @@ class CourseManageSubmissions(ManageSubmissionsHandler):
         return with_course_note(super().render(name, **ns))
 
 
+#: Debian's MathJax 2 (``libjs-mathjax``, ``make mathjax-deps``): the version nbconvert's
+#: templates are written for, served by the Formgrader itself instead of from a CDN.
+MATHJAX_DIR = Path("/usr/share/javascript/mathjax")
+MATHJAX_URL = "/formgrader/course-mathjax/"
+_CDN_MATHJAX = re.compile(r"https://cdnjs\.cloudflare\.com/ajax/libs/mathjax/[^/\"']+/"
+                          r"(?:latest|MathJax)\.js")
+
+
+def local_mathjax(page: str, base_url: str) -> str:
+    """``page`` loading MathJax from this server when Debian's MathJax is installed (the
+    marker's browser may have no network, and a CDN sees every page a marker opens)."""
+    if not (MATHJAX_DIR / "MathJax.js").is_file():
+        return page
+    local = url_path_join(base_url or "/", MATHJAX_URL.lstrip("/"), "MathJax.js")
+    return _CDN_MATHJAX.sub(local, page)
+
+
+class CourseSubmission(SubmissionHandler):
+    """nbgrader's submission page (the marker's), with MathJax served locally."""
+
+    def write(self, chunk):
+        if isinstance(chunk, str):
+            chunk = local_mathjax(chunk, self.base_url)
+        return super().write(chunk)
+
+
 #: (URL under the server's base URL, handler, its arguments): nbgrader's own URLs.
 ROUTES = [
     (r"/formgrader/manage_assignments/?", CourseManageAssignments, {}),
     (r"/formgrader/manage_submissions/([^/]+)/?", CourseManageSubmissions, {}),
+    (r"/formgrader/submissions/([^/]+)/?", CourseSubmission, {}),
+    (MATHJAX_URL + "(.*)", web.StaticFileHandler, {"path": str(MATHJAX_DIR)}),
     (r"/formgrader/api/assignment/([^/]+)/assign", Refused, {"action": "assign"}),
     (r"/formgrader/api/assignment/([^/]+)/release", GuardedRelease, {}),
     (r"/formgrader/api/assignment/([^/]+)/generate_feedback", Refused,

@@ -102,7 +102,7 @@ def term(tmp_path_factory, sources):
     nb = model_version(src)
     for cell in nb["cells"]:
         if (cell["metadata"].get("nbgrader") or {}).get("grade_id") in dict(src.manual):
-            cell["source"] = "Carol's own words about the echo."
+            cell["source"] = "Carol's own words about the echo: $t = 2d/c$."
     write_nb(home / A / f"{src.name}.ipynb", nb)
     # each student is a login of their own on a real machine; one account runs them all here,
     # so --student says whose work it is (nbgrader takes the id from the Unix account)
@@ -256,3 +256,37 @@ def test_withhold_rubrics_drops_the_markers_cells_only():
     exporter.register_preprocessor("autograder.formgrader.withhold.WithholdRubrics")
     html, _ = exporter.from_notebook_node(nb)
     assert "SECRET-RUBRIC" not in html and "about the echo" in html
+
+
+def test_the_markers_page_renders_latex_with_a_local_mathjax(term):
+    """The submission page typesets a written answer's LaTeX with the MathJax this server
+    serves (Debian's libjs-mathjax), asking no other host for anything."""
+    import formgrader_ui
+    from nbgrader.api import Gradebook
+    from playwright.sync_api import sync_playwright
+
+    from autograder.formgrader.handlers import MATHJAX_DIR
+
+    if not formgrader_ui.CHROMIUM.exists() or not (MATHJAX_DIR / "MathJax.js").exists():
+        pytest.skip("needs Debian's chromium and libjs-mathjax (make browser-deps mathjax-deps)")
+    course, src = term["course"], term["src"]
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}", course_id="4f9") as gb:
+        sub_id = gb.find_submission_notebook(src.name, A, STUDENT).id
+    artifacts = REPO / "test-artifacts" / "grading"
+    artifacts.mkdir(parents=True, exist_ok=True)
+    with formgrader_ui.instructor_lab(course, artifacts / "formgrader-mathjax-lab.log") as (
+            base, token), sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=str(formgrader_ui.CHROMIUM),
+                                     args=formgrader_ui.browser_conftest.CHROMIUM_ARGS)
+        try:
+            page = browser.new_page(viewport={"width": 1400, "height": 1000})
+            hosts = []
+            page.on("request", lambda r: hosts.append(r.url.split("/")[2]))
+            page.goto(f"{base}/formgrader/submissions/{sub_id}/?token={token}")
+            page.wait_for_selector(".MathJax_CHTML", timeout=120_000)
+            typeset = page.locator(".MathJax_CHTML").count()
+            page.screenshot(path=str(artifacts / "formgrader-mathjax.png"))
+        finally:
+            browser.close()
+    assert typeset >= 1, "no formula typeset"
+    assert set(hosts) == {base.split("/")[2]}, set(hosts)
