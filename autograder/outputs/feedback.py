@@ -154,8 +154,7 @@ def _written_head(r: CellResult) -> str:
     shows a mark in its table and "not marked" below it.
     """
     if r.status is Status.MANUAL:
-        badge, mark = "marked by hand", f"out of {r.max_score:g}"
-        msg = "A marker gives this answer its mark and comment."
+        badge, mark, msg = "marked by hand", f"out of {r.max_score:g}", r.message
     else:
         badge, mark = r.status.value, f"{round(r.score or 0.0, 2):g} / {r.max_score:g}"
         msg = r.message
