@@ -235,6 +235,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     with tempfile.TemporaryDirectory(prefix=f"4f9-lab-{args.role}-") as tmp:
+        print(f"4F9: preparing {args.course_root} (a release when the notebooks changed)...",
+              file=sys.stderr, flush=True)
         try:
             proc, url = launch(
                 args.role, args.course_root, port=args.port, ip=args.ip, token=args.token,
