@@ -11,7 +11,7 @@ PORT   ?= 8888
 # make lab: the students' own environment (their wheel only, none of this repository's sources)
 STUDENT_VENV := .venv-student
 
-.PHONY: lab instructor test test-fast bench browser-deps sandbox-deps wheel-deps postgres-deps \
+.PHONY: lab instructor test test-fast bench browser-deps sandbox-deps wheel-deps postgres-deps mathjax-deps \
         hub hub-deps clean
 
 $(STAMP): pyproject.toml
@@ -26,7 +26,7 @@ lab: $(STAMP) wheel-deps
 	$(BIN)/python -m autograder lab --role student --student-env $(STUDENT_VENV) --port $(PORT)
 
 ## instructor: open JupyterLab on the nbgrader sources, with the formgrader
-instructor: $(STAMP)
+instructor: $(STAMP) mathjax-deps
 	$(BIN)/python -m autograder lab --role instructor --port $(PORT)
 
 ## browser-deps: Debian's headless Chromium for the browser tests (never a downloaded browser)
@@ -36,6 +36,16 @@ browser-deps:
 	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium >/dev/null 2>&1) \
 	      || echo "warning: could not install chromium; browser tests will be skipped"; \
 	  else echo "warning: not root, cannot apt-get install chromium; browser tests will be skipped"; fi; \
+	fi
+
+## mathjax-deps: Debian's MathJax 2, which the Formgrader serves itself (LaTeX in the marker's
+## pages without a CDN); without it the pages ask the CDN, as nbgrader's do
+mathjax-deps:
+	@if [ ! -f /usr/share/javascript/mathjax/MathJax.js ]; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libjs-mathjax >/dev/null 2>&1) \
+	      || echo "warning: could not install libjs-mathjax; the Formgrader will load MathJax from its CDN"; \
+	  else echo "warning: not root, cannot apt-get install libjs-mathjax; the Formgrader will load MathJax from its CDN"; fi; \
 	fi
 
 ## sandbox-deps: Debian's bubblewrap, the grading sandbox (autograder/isolation)
@@ -83,12 +93,23 @@ HUB_STATE ?= /srv/4f9-hub
 HUB_PORT  ?= 8000
 HUB_IP    ?= 127.0.0.1
 hub: $(STAMP) hub-deps wheel-deps sandbox-deps
-	@test "$$(id -u)" = 0 || { echo "make hub runs as root (it creates Unix users and runs a setuid spawner)"; exit 2; }
+	@test "$$(id -u)" = 0 || { echo "make hub runs as root (it creates Unix users and runs a setuid spawner): sudo make hub, or make hub in a root shell"; exit 2; }
 	$(BIN)/python deploy/hub.py --state $(HUB_STATE) up --port $(HUB_PORT) --ip $(HUB_IP)
 
-## test: the whole suite (library, notebooks, grading bank, browser)
-test: $(STAMP) browser-deps sandbox-deps wheel-deps postgres-deps hub-deps
+## test: the whole suite (library, notebooks, grading bank, browser): about 17 minutes on 2 cores
+test: $(STAMP) browser-deps sandbox-deps wheel-deps postgres-deps hub-deps mathjax-deps
+	@echo "make test: the whole suite, about 17 minutes on 2 cores (one dot per test; make test-fast: 2-3 minutes)"
 	$(BIN)/python -m pytest -n 2 --dist loadgroup -q
+
+## test-fast: the library against its oracles, the judging, the notebooks' contract and their
+## visible (and hidden) tests run in each source notebook, ruff: 2-3 minutes on 2 cores
+FAST_TESTS := tests/course_lib tests/grading/test_judging.py tests/grading/test_handback_page.py \
+              tests/notebooks/test_contract.py tests/notebooks/test_q1_q2_facts.py \
+              tests/notebooks/test_q4_items.py tests/notebooks/test_q5_q6_items.py \
+              tests/notebooks/test_execute_sources.py tests/test_lint.py
+test-fast: $(STAMP)
+	@echo "make test-fast: library, judging, notebooks (2-3 minutes; make test runs everything)"
+	$(BIN)/python -m pytest -n 2 --dist loadgroup -q $(FAST_TESTS)
 
 ## bench: benchmarks against peers measured in the same run (writes benchmarks/results.md)
 bench: $(STAMP)

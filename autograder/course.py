@@ -157,10 +157,38 @@ def config_text(db_url: str, exchange_root: Path | None = None) -> str:
         "c.HTMLExporter.filters = "
         "{'markdown2html': 'autograder.outputs.safe_markdown.markdown2html'}",
         "c.HTMLExporter.raw_mimetypes = []",
+        "",
+        "# nbgrader's own generate_feedback (typed by hand, or a Formgrader without the course's",
+        "# guard, autograder/formgrader/) never copies the marker's rubric cells into a page",
+        "c.GenerateFeedback.preprocessors = ["
+        "'autograder.formgrader.withhold.WithholdRubrics', "
+        "'nbgrader.preprocessors.GetGrades', "
+        "'nbconvert.preprocessors.CSSHTMLHeaderPreprocessor']",
     ]
     if exchange_root is not None:
         lines += ["", f"c.Exchange.root = {str(exchange_root)!r}"]
     return "\n".join(lines) + "\n"
+
+
+#: The students' nbgrader configuration for this machine's exchange, relative to the course root.
+STUDENT_CONFIG = Path("for-students") / "nbgrader_config.py"
+
+
+def student_config_text(exchange_root: Path) -> str:
+    """The ``nbgrader_config.py`` a student needs for the course's local exchange.
+
+    nbgrader's ``fetch_assignment``, ``submit`` and ``fetch_feedback`` look for the exchange at
+    ``/usr/local/share/nbgrader/exchange`` unless told otherwise; off the hub the course's is
+    ``<root>/exchange``. A student puts this file in ``~/.jupyter/`` (or the folder they run
+    nbgrader in); the Validate button's cell timeout is the course's.
+    """
+    return "\n".join([
+        '"""nbgrader configuration for 4F9 students on this machine (copy to ~/.jupyter/)."""',
+        "c = get_config()  # noqa: F821",
+        f"c.CourseDirectory.course_id = {COURSE_ID!r}",
+        f"c.Exchange.root = {str(Path(exchange_root).resolve())!r}",
+        f"c.Execute.timeout = {CELL_TIMEOUT}  # the Validate button",
+    ]) + "\n"
 
 
 @dataclass(frozen=True)
@@ -265,6 +293,7 @@ def _prepare(course: CourseDir, notebooks: list[Path], names: list[str]) -> Cour
     if (
         stamp.exists()
         and (root / "nbgrader_config.py").exists()
+        and (root / STUDENT_CONFIG).exists()
         and (db_file is None or db_file.exists())
         and sorted(p.name for p in course.release_dir.glob("*.ipynb")) == expected
         and sorted(p.name for p in course.source_dir.glob("*.ipynb")) == expected
@@ -277,6 +306,8 @@ def _prepare(course: CourseDir, notebooks: list[Path], names: list[str]) -> Cour
 
     exchange.mkdir(exist_ok=True)
     (root / "nbgrader_config.py").write_text(config)
+    (root / STUDENT_CONFIG).parent.mkdir(exist_ok=True)
+    (root / STUDENT_CONFIG).write_text(student_config_text(exchange))
     course.source_dir.mkdir(parents=True, exist_ok=True)
     for old in course.source_dir.glob("*.ipynb"):
         if old.name not in names:
@@ -334,5 +365,5 @@ def _backup_student_work(course: CourseDir, stamp: Path) -> Path | None:
 __all__ = [
     "ASSIGNMENT", "COURSE_ID", "REPO_ROOT", "NOTEBOOKS_DIR", "DEFAULT_COURSE_ROOT", "CELL_TIMEOUT",
     "CODE_STUB", "TEXT_STUB", "CourseDir", "source_notebooks", "nbgrader_env", "default_db_url",
-    "run_nbgrader", "config_text", "prepare_course",
+    "run_nbgrader", "config_text", "prepare_course", "STUDENT_CONFIG", "student_config_text",
 ]

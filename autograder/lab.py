@@ -34,19 +34,21 @@ import json
 import os
 import secrets
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 from .course import (
     ASSIGNMENT,
-    CELL_TIMEOUT,
-    COURSE_ID,
     DEFAULT_COURSE_ROOT,
     nbgrader_env,
     prepare_course,
+    student_config_text,
 )
+from .formgrader import EXTENSION as FORMGRADER_GUARD
 from .student_bundle import (
     STUDENT_DISABLED_PLUGINS,
     STUDENT_DISABLED_SERVER_EXTENSIONS,
@@ -85,7 +87,8 @@ def page_config(role: str) -> dict:
 def server_config(role: str) -> dict:
     """The ``jupyter_server_config.json`` of a launch (server extensions on or off)."""
     if role == "instructor":
-        return {}
+        # the Formgrader's buttons go through the course's guard (autograder/formgrader/)
+        return {"ServerApp": {"jpserver_extensions": {FORMGRADER_GUARD: True}}}
     off = {ext: False for ext in STUDENT_DISABLED_SERVER_EXTENSIONS}
     return {"ServerApp": {"jpserver_extensions": off}}
 
@@ -102,11 +105,7 @@ def write_launch_config(config_dir: Path, role: str, course_root: Path) -> Path:
         # the Assignments panel reads nbgrader config from the Jupyter config path: point it at
         # the course's local exchange instead of /srv/nbgrader/exchange
         (config_dir / "nbgrader_config.py").write_text(
-            "c = get_config()  # noqa: F821\n"
-            f"c.CourseDirectory.course_id = {COURSE_ID!r}\n"
-            f"c.Exchange.root = {str(Path(course_root).resolve() / 'exchange')!r}\n"
-            f"c.Execute.timeout = {CELL_TIMEOUT}  # the Validate button\n"
-        )
+            student_config_text(Path(course_root) / "exchange"))
     return config_dir
 
 
@@ -192,6 +191,21 @@ def launch_environment(
     return python, env
 
 
+def wait_until_listening(proc: subprocess.Popen, ip: str, port: int, timeout: float = 600,
+                         poll: float = 0.25) -> bool:
+    """Wait until the server accepts connections on ``(ip, port)``: True; False when the
+    process ended first or ``timeout`` seconds passed (the URL is printed only once it works)."""
+    host = "127.0.0.1" if ip in ("", "0.0.0.0", "localhost") else ("::1" if ip == "::" else ip)
+    deadline = time.monotonic() + timeout
+    while proc.poll() is None and time.monotonic() < deadline:
+        try:
+            with socket.create_connection((host, port), timeout=2):
+                return True
+        except OSError:
+            time.sleep(poll)
+    return False
+
+
 def _interrupt(signum, frame):
     raise KeyboardInterrupt
 
@@ -221,6 +235,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     with tempfile.TemporaryDirectory(prefix=f"4f9-lab-{args.role}-") as tmp:
+        print(f"4F9: preparing {args.course_root} (a release when the notebooks changed)...",
+              file=sys.stderr, flush=True)
         try:
             proc, url = launch(
                 args.role, args.course_root, port=args.port, ip=args.ip, token=args.token,
@@ -235,10 +251,15 @@ def main(args: argparse.Namespace) -> int:
         if args.role == "student" and args.student_env is None:
             view += ("\n  (preview in the instructors' environment: course_lib sources are "
                      "readable here; `make lab` opens the students' own environment)")
-        print(f"\n4F9 {view}\n  {url}\n", flush=True)
         # one Ctrl-C (or a SIGTERM to this launcher) stops JupyterLab without its y/n prompt
         signal.signal(signal.SIGTERM, _interrupt)
         try:
+            print(f"4F9: starting JupyterLab on port {args.port}...", file=sys.stderr, flush=True)
+            if wait_until_listening(proc, args.ip, args.port):
+                print(f"\n4F9 {view}\n  {url}\n", flush=True)
+            elif proc.poll() is None:
+                print(f"warning: JupyterLab does not answer on port {args.port} yet; try\n"
+                      f"  {url}", file=sys.stderr, flush=True)
             return proc.wait()
         except KeyboardInterrupt:
             proc.terminate()

@@ -32,6 +32,7 @@ import subprocess
 import sys
 import sysconfig
 import tempfile
+import time
 import zipfile
 from pathlib import Path
 
@@ -243,11 +244,13 @@ def build_wheel(cache_dir: Path) -> Path:
         for old in target.parent.iterdir():  # one cached build at a time
             if old.is_dir():
                 shutil.rmtree(old)
-        print(f"compiling the students' wheel into {target} (a minute or two) ...",
-              file=sys.stderr, flush=True)
+        print(f"compiling the students' wheel into {target} (about five minutes on two cores; "
+              "kept for the next runs) ...", file=sys.stderr, flush=True)
+        started = time.monotonic()
         with tempfile.TemporaryDirectory(prefix="4f9-student-wheel-") as tmp:
             stage = stage_sources(Path(tmp) / "src", digest)
             wheel = _run_build(stage, Path(tmp) / "dist")
+            print(f"compiled in {time.monotonic() - started:.0f} s", file=sys.stderr, flush=True)
             problems = wheel_problems(wheel)
             if problems:
                 raise WheelLeak("the student wheel would leak instructor material:\n  "

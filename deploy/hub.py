@@ -43,6 +43,7 @@ import shutil
 import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 DEPLOY = Path(__file__).resolve().parent
@@ -330,15 +331,24 @@ def prepare(s: HubSettings, wheel_cache: Path) -> Path:
     for tool in (s.proxy_command, "/usr/bin/setfacl"):
         if not Path(tool).exists():
             raise FileNotFoundError(f"{tool} is missing: `make hub-deps` installs it")
+    _step("users and groups")
     ensure_group(s.students_group)
     ensure_user(s.grader, [s.instructors_group])
     settings = write_settings(s)
+    _step("the students' environment (the first time: the compiled wheel, about 5 minutes)")
     build_student_env(Path(s.paths["student_env"]), wheel_cache)
+    _step("the instructors' environment (the first time: a few minutes)")
     build_instructor_env(Path(s.paths["instructor_env"]), s.instructors_group)
     write_jupyter_configs(s)
+    _step("the exchange and the course (release and gradebook)")
     prepare_exchange(s)
     prepare_course(s)
     return settings
+
+
+def _step(what: str) -> None:
+    """A progress line: the first ``make hub`` takes about ten minutes."""
+    print(f"hub: {time.strftime('%H:%M:%S')} {what}...", file=sys.stderr, flush=True)
 
 
 def hub_command(s: HubSettings) -> tuple[list[str], dict]:
@@ -420,9 +430,15 @@ def main(argv: list[str] | None = None) -> int:
         p.add_argument("password", nargs="?",
                        help="asked for when omitted (a password on the command line shows in ps)")
     args = parser.parse_args(argv)
-    if args.command == "up":
-        return _up(args)
-    return _add(args, "students_group" if args.command == "add-student" else "instructors_group")
+    try:
+        if args.command == "up":
+            return _up(args)
+        return _add(args, "students_group" if args.command == "add-student"
+                    else "instructors_group")
+    except KeyboardInterrupt:
+        # Ctrl-C while preparing: a line, not a traceback (running `up` again resumes)
+        print("\nhub: stopped (Ctrl-C); run the same command again to resume", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

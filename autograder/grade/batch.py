@@ -49,6 +49,9 @@ class Options:
     scheduler: str | None = None    #: a dask scheduler's address: run the jobs on its workers
     max_notebook_mb: float = MAX_NOTEBOOK_MB
     progress: bool = True
+    #: folder id -> the id whose numbers and option letters its notebooks are judged on (an
+    #: instructor's remedy for an honest wrong STUDENT_ID: ``grade --graded-as``)
+    graded_as: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass
@@ -60,6 +63,11 @@ class NotebookWork:
     sub: Submission
     plan: CellPlan
     names: list[tuple[str, str, float]]     #: (name, test grade_id, points)
+    variant: str = ""                       #: whose numbers and letters (default: the student)
+
+    @property
+    def variant_id(self) -> str:
+        return self.variant or self.student
 
 
 def grade_batch(submitted: Path, sources: list[SourceNotebook], opts: Options,
@@ -94,6 +102,8 @@ def _read_and_prepare(submitted: Path, student: str, src: SourceNotebook, opts: 
                               opts.max_notebook_mb)
         subs[(student, src.name)] = sub
         work = _prepare(student, src, sub, rows)
+        if work is not None:
+            work.variant = opts.graded_as.get(student, "")
     except Exception as exc:  # noqa: BLE001 - one broken notebook never stops the batch
         traceback.print_exc()
         print(f"error: the grader failed on {student}/{src.name}", file=sys.stderr)
@@ -212,7 +222,7 @@ def plan_notebook(work: NotebookWork, opts: Options) -> tuple[NotebookJob, dict]
     """The sandbox's job for one notebook, and per graded name its drawn cases and hint."""
     prepared = {name: _prepare_name(work, name, opts) for name, _, _ in work.names}
     job = NotebookJob(f"{work.student}--{work.src.name}", work.src.setup_source,
-                      [p[0] for p in prepared.values()], student=work.student)
+                      [p[0] for p in prepared.values()], student=work.variant_id)
     return job, prepared
 
 
@@ -281,7 +291,7 @@ def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
         typed = typed_answer(work.plan.python.get(work.plan.chosen[name], ""), name)
         if typed is not NOT_TYPED:      # judged on what the cell types, not on what ran
             run = replace(run, outcomes=[CaseOutcome(0, OutcomeKind.RETURNED, value=typed)])
-    records = _records(ex, kind, drawn, run, show_output, work.student)
+    records = _records(ex, kind, drawn, run, show_output, work.variant_id)
     load_notes = _load_notes(run, show_output)
     score, status, message = judging.summarise(records, points, kind)
     if kind is not CellKind.FUNCTION and typed is NOT_TYPED and hint.shape is AnswerShape.WRITTEN:
@@ -294,6 +304,9 @@ def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
         if override is not None:
             status, message = override
     notes = list(work.plan.notes.get(name, []))
+    if work.variant and kind is not CellKind.FUNCTION:
+        notes.append(f"judged on the numbers and option letters of {work.variant}, the id this "
+                     "notebook was worked for (the instructor's decision)")
     fits = _fits_other(ex, run, others) if kind in (CellKind.CHOICE, CellKind.VALUE) and \
         status is not Status.OK else ""
     if fits and reveal:

@@ -30,8 +30,10 @@ from ..isolation import UNSAFE_WARNING, IsolationUnavailable, Limits, Mode, prob
 from ..outputs import csv as csv_output
 from ..outputs import feedback, gradebook, items, report
 from ..exercises import REGISTRY
+from ..course import default_db_url
 from ..outputs.gradebook_url import MissingDriver, resolve_db_url
 from ..outputs.similarity import reference_source
+from . import remedy
 from .batch import Options, grade_batch
 from .executors import ClusterUnavailable
 from .reading import MAX_NOTEBOOK_MB
@@ -74,6 +76,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add("--unsafe-no-isolation", action="store_true", help="grade even when the operating-system "
         "sandbox is unavailable (student code then runs with your rights: never on real work)")
     add("--quiet", action="store_true", help="no progress bar")
+    add("--graded-as", action="append", default=[], metavar="STUDENT=ID",
+        help="judge STUDENT's number items and option letters on ID's (the id the notebook was "
+        "worked for, after an honest wrong STUDENT_ID); needs --reason; logged in "
+        "OUT/graded-as.log (repeat for several students)")
+    add("--reason", default="", help="why --graded-as was decided (written to the log)")
 
 
 def _mode(args) -> Mode | None:
@@ -101,7 +108,8 @@ def _options(args, secret: bytes, mode: Mode) -> Options:
                     memory_mb=args.memory_mb, job_timeout=args.job_timeout)
     return Options(out=args.out, jobs=max(1, args.jobs), limits=limits, secret=secret,
                    reveal_hidden=args.reveal_hidden, mode=mode, scheduler=args.scheduler,
-                   max_notebook_mb=args.max_notebook_mb, progress=not args.quiet)
+                   max_notebook_mb=args.max_notebook_mb, progress=not args.quiet,
+                   graded_as=getattr(args, "graded_as_map", {}))
 
 
 def _check_db_url(args) -> bool:
@@ -122,6 +130,11 @@ def main(args: argparse.Namespace) -> int:
     if not args.submitted.is_dir():
         print(f"error: {args.submitted} is not a folder", file=sys.stderr)
         return 2
+    try:
+        graded_as = remedy.parse_graded_as(args.graded_as, args.reason, args.submitted)
+    except ValueError as exc:
+        print(f"error: --graded-as: {exc}", file=sys.stderr)
+        return 2
     paths = (sorted(Path(args.source).glob("q[0-9]*_*.ipynb")) if args.source
              else default_sources())
     if not paths:
@@ -138,46 +151,59 @@ def main(args: argparse.Namespace) -> int:
     sources = [load_source(p) for p in paths]
     args.out.mkdir(parents=True, exist_ok=True)
     os.chmod(args.out, 0o700)
+    args.graded_as_map = graded_as
     t0 = time.monotonic()
     try:
         batch = grade_batch(args.submitted, sources, _options(args, secret, mode))
     except ClusterUnavailable as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    _write_outputs(batch, sources, args)
+    written = _write_outputs(batch, sources, args)
+    if graded_as:
+        written.append(remedy.log(args.out, graded_as, args.reason, batch))
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"graded {len(batch.students)} students, {len(batch.results)} cells in "
-          f"{time.monotonic() - t0:.0f} s (grader peak memory {peak_mb:.0f} MB): "
-          f"{args.out / 'grades.csv'}", file=sys.stderr)
+          f"{time.monotonic() - t0:.0f} s (grader peak memory {peak_mb:.0f} MB); wrote:\n"
+          + "\n".join(f"  {w}" for w in written), file=sys.stderr)
     return 0
 
 
-def _write_outputs(batch, sources, args) -> None:
+def _write_outputs(batch, sources, args) -> list[str]:
+    """Write every output; what was written, one line each, for the closing message."""
     out: Path = args.out
     csv_output.write_csv(batch.results, out / "grades.csv")
+    written = [f"{out / 'grades.csv'}  (the grader's automatic results)"]
     try:
         items.write_items_csv(items.item_statistics(items.responses(batch.results)),
                               out / "items.csv")
+        written.append(f"{out / 'items.csv'}  (item analysis: facility, discrimination, flags)")
     except Exception as exc:  # noqa: BLE001 - grades.csv is written; the feedback follows
         traceback.print_exc(limit=3)
         print(f"warning: items.csv could not be written ({type(exc).__name__})", file=sys.stderr)
-    feedback.write_all(batch.results, out / "feedback", reveal_hidden=args.reveal_hidden)
+    pages = feedback.write_all(batch.results, out / "feedback", reveal_hidden=args.reveal_hidden,
+                               ids=remedy.ids_of(batch, getattr(args, "graded_as_map", {})))
+    written.append(f"{out / 'feedback'}/<student>/<notebook>.html  ({len(pages)} feedback pages)")
     try:
         report.write_report(batch.results, sources, out / "report.html",
                             references=reference_sources(batch.results), jobs=args.jobs)
+        written.append(f"{out / 'report.html'}  (histograms, failures, similar solutions)")
     except Exception as exc:  # noqa: BLE001 - the feedback is written; the gradebook follows
         traceback.print_exc(limit=3)
         print(f"warning: the report could not be written ({type(exc).__name__})",
               file=sys.stderr)
     if args.no_gradebook:
-        return
+        return written
     try:
-        gradebook.sync(batch, sources, submitted=args.submitted, out=out, db_url=args.db_url)
+        root = gradebook.sync(batch, sources, submitted=args.submitted, out=out,
+                              db_url=args.db_url)
+        written.append(f"{args.db_url or default_db_url(root)}  (the gradebook) and "
+                       f"{root / 'autograded'}/  (mark the written answers in the Formgrader)")
     except Exception as exc:  # noqa: BLE001 - grades.csv is written; say what failed
         traceback.print_exc(limit=3)
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         print(f"warning: the gradebook could not be updated ({type(exc).__name__}: {first}); "
               "grades.csv, the feedback and the report are complete", file=sys.stderr)
+    return written
 
 
 def reference_sources(results) -> dict[str, str]:

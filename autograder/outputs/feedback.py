@@ -15,13 +15,15 @@ leak. Choice answers are never revealed.
 from __future__ import annotations
 
 import dataclasses
+import html
+import re
 import sys
 import traceback
 from pathlib import Path
 
 import numpy as np
 
-from ..model import VERDICT_WORDS, CaseRecord, CellKind, CellResult, Verdict
+from ..model import VERDICT_WORDS, CaseRecord, CellKind, CellResult, Status, Verdict
 from .html import e, e_clipped, page, plot_data, svg_lines, value_text, write_page
 
 _STYLE = """
@@ -31,6 +33,7 @@ _STYLE = """
 .timeout{background:#ef6c00}.missing,.unreadable,.unanswered{background:#616161}
 .reference-used,.rejected-output{background:#b71c1c}.manual{background:#1565c0}
 .grader-error{background:#000}.pass{color:#2e7d32}.fail{color:#c62828}
+.whose{border-left:4px solid #ef6c00;padding:.3em .8em;background:#fff3e0}
 details{margin:.4em 0}svg{background:#fafafa;border:1px solid #ddd}.legend span{margin-right:1.2em}
 """
 #: Characters of the student's own code shown back (counted after HTML escaping).
@@ -45,8 +48,14 @@ MESSAGE_CHARS = 2_000
 REVEAL_ROWS = 20
 
 
-def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = False) -> list[Path]:
-    """Write one page per (student, notebook) that has results; returns the files written."""
+def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = False,
+              ids: dict | None = None) -> list[Path]:
+    """Write one page per (student, notebook) that has results; returns the files written.
+
+    ``ids``: per (student, notebook), ``{"named": [ids the notebook names besides its
+    folder's], "graded_as": the id it was judged on by the instructor's decision, or ""}``
+    (:func:`autograder.grade.remedy.ids_of`): the page says so at the top.
+    """
     by_key: dict[tuple[str, str], list[CellResult]] = {}
     for r in results:
         by_key.setdefault((r.student, r.notebook), []).append(r)
@@ -55,7 +64,8 @@ def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = Fal
         path = Path(folder) / student / f"{notebook}.html"
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            write_page(path, render(student, notebook, rows, reveal_hidden))
+            write_page(path, render(student, notebook, rows, reveal_hidden,
+                                    whose=(ids or {}).get((student, notebook))))
         except Exception:  # noqa: BLE001 - one bad page never stops the others
             traceback.print_exc()
             print(f"error: the feedback of {student}/{notebook} could not be written",
@@ -65,21 +75,22 @@ def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = Fal
     return written
 
 
-def render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: bool) -> str:
+def render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: bool,
+           whose: dict | None = None) -> str:
     """The feedback page of one student's notebook, under :data:`PAGE_CHARS` whatever the
     submission: a page that would be longer is drawn again without the code and output shown
     back, and with each message cut to :data:`MESSAGE_CHARS`."""
-    text = _render(student, notebook, rows, reveal_hidden)
+    text = _render(student, notebook, rows, reveal_hidden, whose=whose)
     if len(text) <= PAGE_CHARS:
         return text
     slim = [dataclasses.replace(r, code="", printed="", message=r.message[:MESSAGE_CHARS])
             for r in rows]
-    return _render(student, notebook, slim, reveal_hidden, note=(
+    return _render(student, notebook, slim, reveal_hidden, whose=whose, note=(
         "This page would have been too long: your code and its printed output are not shown."))
 
 
 def _render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: bool,
-            note: str = "") -> str:
+            note: str = "", whose: dict | None = None) -> str:
     auto = [r for r in rows if r.kind is not CellKind.MANUAL]
     manual = [r for r in rows if r.kind is CellKind.MANUAL]
     got = sum(r.score or 0.0 for r in auto)
@@ -89,6 +100,8 @@ def _render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: 
         total += (f"; written answers ({sum(r.max_score for r in manual):g} marks) are marked by "
                   "hand")
     body = [f"<h1>{e(notebook)}</h1>", total + "</p>"]
+    if whose:
+        body.append(f"<p class='whose'>{e(whose_text(student, whose))}</p>")
     if note:
         body.append(f"<p class='note'>{e(note)}</p>")
     if reveal_hidden:
@@ -99,9 +112,10 @@ def _render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: 
 
 
 def _cell_html(r: CellResult, reveal: bool) -> str:
+    if r.kind is CellKind.MANUAL:
+        return "\n".join([_written_head(r)] + _outputs(r))
     score = "–" if r.score is None else f"{round(r.score, 2):g}"
-    title = r.name if r.kind is not CellKind.MANUAL else f"{r.name} (written answer)"
-    parts = [f"<h2>{e(title)} <span class='badge {e(r.status.value)}'>{e(r.status.value)}"
+    parts = [f"<h2>{e(r.name)} <span class='badge {e(r.status.value)}'>{e(r.status.value)}"
              f"</span> <small>{score} / {r.max_score:g}</small></h2>",
              f"<p class='msg'>{e(r.message)}</p>"]
     if r.kind is CellKind.FUNCTION and r.cases:
@@ -111,6 +125,68 @@ def _cell_html(r: CellResult, reveal: bool) -> str:
           and r.cases[0].verdict is not Verdict.PASS):
         parts.append("<p class='note'>See the model answer in the released solutions.</p>")
     return "\n".join(parts + _outputs(r))
+
+
+def whose_text(student: str, whose: dict) -> str:
+    """What the page says when the notebook names another id than the one it was handed in
+    under (only the ids the student typed: nothing about anyone's answers or keys)."""
+    if whose.get("graded_as"):
+        return (f"Graded on the numbers and option letters of {whose['graded_as']}, the id this "
+                f"notebook was worked for, as your instructor decided (handed in as {student}).")
+    named = ", ".join(whose.get("named") or [])
+    return (f"Check your student id: this notebook names {named} (its STUDENT_ID cell or a "
+            f"saved output), but it was handed in as {student}. It is graded on the numbers "
+            f"and option letters of {student}, the id it was handed in under: set STUDENT_ID = "
+            f"\"{student}\" in the id cell, run the notebook again, and check your answers to "
+            "the 'your numbers' and multiple-choice items before you hand in again.")
+
+
+#: One written answer's heading, as :func:`with_marks` finds it again in a written page.
+_WRITTEN = re.compile(r"<div class='written' data-grade-id='([^']*)'>.*?</div><!--/written-->",
+                      re.S)
+
+
+def _written_head(r: CellResult) -> str:
+    """A written answer's heading: waiting for its marker, or 0 when left blank.
+
+    The grader gives a written answer no mark of its own, so the page says who does; the
+    hand-back (:func:`with_marks`) puts the marker's mark in its place, so one page never
+    shows a mark in its table and "not marked" below it.
+    """
+    if r.status is Status.MANUAL:
+        badge, mark, msg = "marked by hand", f"out of {r.max_score:g}", r.message
+    else:
+        badge, mark = r.status.value, f"{round(r.score or 0.0, 2):g} / {r.max_score:g}"
+        msg = r.message
+    return _written_div(r.name, badge, r.status.value, mark, msg)
+
+
+def _written_div(grade_id: str, badge: str, css: str, mark: str, msg: str) -> str:
+    return (f"<div class='written' data-grade-id='{e(grade_id)}'><h2>{e(grade_id)} (written "
+            f"answer) <span class='badge {e(css)}'>{e(badge)}</span> <small>{e(mark)}</small>"
+            f"</h2><p class='msg'>{e(msg)}</p></div><!--/written-->")
+
+
+def with_marks(page_html: str, marks: dict[str, tuple[float, float, bool]]) -> str:
+    """A grader's page with each written answer's heading showing the gradebook's mark.
+
+    ``marks``: ``{grade_id: (score, max_score, marked)}``. An answer still waiting for its
+    marker says so; one marked shows its mark (the comment is in the hand-back's table).
+    """
+    def head(match: re.Match) -> str:
+        gid = html.unescape(match.group(1))
+        if gid not in marks:
+            return match.group(0)
+        score, max_score, marked = marks[gid]
+        if "<span class='badge unanswered'>" in match.group(0) and marked and score == 0:
+            return match.group(0)                 # left blank: 0, with the grader's reason
+        if not marked:
+            return _written_div(gid, "not marked yet", "manual", f"out of {max_score:g}",
+                                "A marker has not marked this answer yet.")
+        return _written_div(gid, "marked", "ok", f"{round(score, 2):g} / {max_score:g}",
+                            "Marked by hand: the marker's comment is in the table above.")
+
+    return _WRITTEN.sub(head, page_html)
 
 
 def _visible_html(visible: list[CaseRecord]) -> list[str]:

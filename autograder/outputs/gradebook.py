@@ -39,6 +39,7 @@ from pathlib import Path
 from ..course import default_db_url
 from ..model import (ASSIGNMENT, Batch, CellKind, CellResult, SourceNotebook, Status,
                      Submission, printable)
+from .choices import choice_legend
 from .safe_markdown import quoted_cell
 
 COURSE_ID = "4f9"
@@ -253,6 +254,10 @@ def _clean(cell: dict) -> dict:
 def _verdict_output(r: CellResult) -> dict:
     score = "-" if r.score is None else f"{r.score:g}"
     text = f"autograder: {score} / {r.max_score:g} [{r.status.value}] {printable(r.message)}\n"
+    if r.kind is CellKind.CHOICE:
+        answer = r.cases[0].received if r.cases else None
+        legend = choice_legend(r.name, r.student, answer)
+        text += f"{printable(legend)}\n" if legend else ""
     return {"output_type": "stream", "name": "stdout", "text": text}
 
 

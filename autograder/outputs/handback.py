@@ -30,6 +30,7 @@ from pathlib import Path
 
 from ..course import COURSE_ID, run_nbgrader
 from ..model import ASSIGNMENT, format_score
+from .feedback import with_marks
 from .gradebook import CARRIED_FILES
 from .html import e, page
 
@@ -101,13 +102,17 @@ def render(marks: NotebookMarks, grader_page: str | None) -> str:
         mark = (f"{format_score(round(m.score, 2))} / {format_score(m.max_score)}" if m.marked
                 else "not marked yet")
         rows.append(f"<tr><td>{e(m.grade_id)}{' (written answer)' if m.written else ''}</td>"
-                    f"<td>{e(mark)}</td><td><pre>{e(m.comment)}</pre></td></tr>")
+                    f"<td>{e(mark)}</td><td class='comment'>{e(m.comment)}</td></tr>")
     rows.append("</table>")
-    style = ""
+    # a comment is prose: the page's font at full size, its line breaks kept (not a <pre>
+    # inside the table's smaller font, which rendered it at 0.8 of the text around it)
+    style = "td.comment{white-space:pre-wrap;word-break:break-word;font-size:1.1em}"
     body = ["<p class='note'>The automatic tests' results are not available.</p>"]
     if grader_page:
-        found = _BODY.search(grader_page)
-        style = "".join(_STYLE_TAG.findall(grader_page))
+        written = {m.grade_id: (m.score, m.max_score, m.marked) for m in marks.marks
+                   if m.written}
+        found = _BODY.search(with_marks(grader_page, written))
+        style += "".join(_STYLE_TAG.findall(grader_page))
         body = ["<h2>Automatic tests, case by case</h2>", found.group(1) if found else ""]
     return page(f"{marks.notebook}: feedback for {marks.student}", head + rows + body, style)
 

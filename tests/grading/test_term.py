@@ -1,9 +1,12 @@
 """A whole term, driven as the README's instructor section says, on nbgrader's local exchange.
 
-release → two students fetch, answer and submit (nbgrader's own ``fetch_assignment`` and
-``submit``, each with a ``HOME`` of their own) → ``nbgrader collect`` → ``python -m autograder
-grade`` → written answers marked (one in the Formgrader, in Chromium, the README's click path;
-the rest through nbgrader's Gradebook API, as the Formgrader stores them) →
+release → two students fetch, answer and submit with the commands the README gives students
+(``course/for-students/nbgrader_config.py`` copied to ``~/.jupyter/``, then nbgrader's own
+``fetch_assignment`` and ``submit``, each with a ``HOME`` of their own; ``--student`` stands for
+each student's own Unix login, since one account runs them all here) → ``nbgrader collect`` →
+``python -m autograder grade`` → written answers marked (one in the Formgrader, in Chromium,
+the README's click path; the rest through nbgrader's Gradebook API, as the Formgrader stores
+them) →
 re-grade with ``--reveal-hidden`` (marks, comments and flags intact) → ``python -m autograder
 feedback`` → each student's ``nbgrader fetch_feedback`` → ``python -m autograder export``.
 
@@ -19,6 +22,7 @@ import datetime as dt
 import html
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -34,7 +38,8 @@ STUDENTS = ("alice", "bob")
 
 
 def _nbgrader(args: list[str], cwd: Path, home: Path | None = None) -> str:
-    """``python -m nbgrader ...`` in ``cwd`` (as a student when ``home`` is given)."""
+    """``python -m nbgrader ...`` in ``cwd`` (as a student when ``home`` is given: only the
+    configuration in that ``HOME``, nothing on the command line, says where the exchange is)."""
     env = {k: v for k, v in os.environ.items() if not k.startswith("JUPYTER")}
     env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
     if home is not None:
@@ -84,21 +89,22 @@ def build_term(base: Path, sources) -> dict:
     exchange = course / "exchange"            # the course's own exchange (nbgrader_config.py)
     (base / "secret").write_bytes(SECRET + b"\n")
     _autograder("release", "--course-root", str(course))
-    ex = f"--Exchange.root={exchange}"
-    _nbgrader(["release_assignment", A, ex, "--force"], course)
+    _nbgrader(["release_assignment", A], course)            # README step 1, in course/
     for student in STUDENTS:
         home = base / "home" / student
-        home.mkdir(parents=True)
-        _nbgrader(["fetch_assignment", A, "--course=4f9", ex], home, home)
+        (home / ".jupyter").mkdir(parents=True)
+        shutil.copyfile(course / "for-students" / "nbgrader_config.py",
+                        home / ".jupyter" / "nbgrader_config.py")
+        _nbgrader(["fetch_assignment", A, "--course", "4f9"], home, home)
         for src in sources:
             path = home / A / f"{src.name}.ipynb"
             write_nb(path, _answers(student, src, path))
-        _nbgrader(["submit", A, "--course=4f9", f"--student={student}", ex], home, home)
-    _nbgrader(["collect", A, ex], course)
+        _nbgrader(["submit", A, "--course", "4f9", f"--student={student}"], home, home)
+    _nbgrader(["collect", A], course)
     grading = base / "grading"
     run_grade(course / "submitted", grading, secret_file=base / "secret")
     return {"base": base, "course": course, "exchange": exchange, "grading": grading,
-            "db_url": f"sqlite:///{course / 'gradebook.db'}", "ex": ex}
+            "db_url": f"sqlite:///{course / 'gradebook.db'}"}
 
 
 def _gradebook(term):
@@ -191,7 +197,7 @@ def _hand_back(term, src, marks) -> None:
     _autograder("feedback", "--grading", str(term["grading"]), "--course", str(term["course"]))
     for student in STUDENTS:
         home = term["base"] / "home" / student
-        _nbgrader(["fetch_feedback", A, "--course=4f9", term["ex"]], home, home)
+        _nbgrader(["fetch_feedback", A, "--course", "4f9", f"--student={student}"], home, home)
         pages = list((home / A / "feedback").rglob(f"{src.name}.html"))
         assert len(pages) == 1, pages
         text = html.unescape(pages[0].read_text(encoding="utf-8"))

@@ -1,0 +1,87 @@
+"""The remedy for an honest wrong id: ``grade --graded-as STUDENT=ID --reason ...``.
+
+bob2 worked the whole assignment under alice's id (``STUDENT_ID = "alice"``, alice's numbers
+and option letters typed), and handed it in as bob2. Graded as usual, the items whose right
+answer differs between the two ids are wrong (decided here with the registry's references for
+both ids, not by the grader), and the feedback page tells bob2 that the notebook names another
+id. Graded with ``--graded-as bob2=alice``, every item scores (the source's points), each says
+whose numbers judged it, and ``graded-as.log`` holds the decision, its reason and the evidence.
+"""
+
+from __future__ import annotations
+
+import html
+
+import pytest
+
+from autograder.exercises import REGISTRY
+from autograder.grade.remedy import LOG_NAME, parse_graded_as
+from gradingtools import read_grades, run_grade, write_nb
+from test_own_numbers import _differs, literal_version
+
+pytestmark = [pytest.mark.xdist_group("grading"), pytest.mark.slow]
+
+
+def _items(src):
+    return [(name, tid, pts) for name, tid, pts in src.graded
+            if name in REGISTRY and REGISTRY[name].kind in ("choice", "value")]
+
+
+@pytest.fixture(scope="module")
+def wrong_id(tmp_path_factory, sources):
+    root = tmp_path_factory.mktemp("graded-as")
+    used = [s for s in sources if _items(s)]
+    for src in used:
+        write_nb(root / "submitted" / "bob2" / "tripos2006" / f"{src.name}.ipynb",
+                 literal_version(src, "alice"), type_answers=False)
+    run_grade(root / "submitted", root / "plain", "--no-gradebook")
+    remedied = run_grade(root / "submitted", root / "remedied", "--no-gradebook",
+                         "--graded-as", "bob2=alice", "--reason", "typed a friend's id; "
+                         "worked alone (emails of 3 Dec)")
+    return root, used, remedied
+
+
+def test_graded_as_usual_the_other_ids_items_are_wrong_and_the_page_says_why(wrong_id):
+    root, used, _ = wrong_id
+    rows = read_grades(root / "plain")
+    differing = [(src, name, tid) for src in used for name, tid, _ in _items(src)
+                 if _differs(name, "alice", "bob2")]
+    assert differing, "alice's and bob2's numbers differ somewhere"
+    for src, name, tid in differing:
+        assert rows[("bob2", src.name, tid)]["status"] == "failed", name
+    page = html.unescape((root / "plain" / "feedback" / "bob2" / f"{used[0].name}.html")
+                         .read_text(encoding="utf-8"))
+    assert "this notebook names alice" in page and 'STUDENT_ID = "bob2"' in page
+
+
+def test_graded_as_the_id_it_was_worked_for_every_item_scores(wrong_id):
+    root, used, remedied = wrong_id
+    rows = read_grades(root / "remedied")
+    for src in used:
+        for name, tid, points in _items(src):
+            row = rows[("bob2", src.name, tid)]
+            assert float(row["score"]) == pytest.approx(points, abs=1e-9), (name, row)
+            assert "option letters of alice" in row["message"]
+    log = (root / "remedied" / LOG_NAME).read_text(encoding="utf-8")
+    assert "bob2 graded on the numbers and option letters of alice" in log
+    assert "reason: typed a friend's id; worked alone (emails of 3 Dec)" in log
+    assert f"{used[0].name} names alice" in log                  # the evidence
+    for output in (LOG_NAME, "report.html", "grades.csv", "feedback pages"):
+        assert output in remedied.stderr.split("wrote:")[-1], output   # named at the end
+    page = html.unescape((root / "remedied" / "feedback" / "bob2" / f"{used[0].name}.html")
+                         .read_text(encoding="utf-8"))
+    assert "Graded on the numbers and option letters of alice" in page
+
+
+@pytest.mark.parametrize("pairs, reason, why", [
+    (["bob2=alice"], "", "--reason"),
+    (["bob2=bob2"], "r", "same id twice"),
+    (["bob2"], "r", "is not STUDENT=ID"),
+    (["bob2=alice", "bob2=carol"], "r", "two ids"),
+    (["nobody=alice"], "r", "no submission of nobody"),
+    (["bob2=../x"], "r", "is not STUDENT=ID"),
+])
+def test_graded_as_refuses_what_it_cannot_log_clearly(tmp_path, pairs, reason, why):
+    (tmp_path / "bob2" / "tripos2006").mkdir(parents=True)
+    with pytest.raises(ValueError, match=why):
+        parse_graded_as(pairs, reason, tmp_path)

@@ -1,0 +1,86 @@
+"""The hand-back page says one thing about each written answer (issue: the table showed
+``q1a_answer 4.5 / 6`` with the marker's comment while the section below still said
+``manual – / 6 marked by hand in formgrader``).
+
+The page is read as a student reads it: its text, by Python's HTML parser. Oracle: the mark the
+test gave (4.5 of 6), and the words a page must not use about a marked answer.
+"""
+
+from __future__ import annotations
+
+import re
+from html.parser import HTMLParser
+
+from autograder.model import CellKind, CellResult, Status
+from autograder.outputs import feedback, handback
+
+
+class _Text(HTMLParser):
+    def __init__(self):
+        super().__init__(convert_charrefs=True)
+        self.parts: list[str] = []
+
+    def handle_data(self, data):
+        self.parts.append(data)
+
+
+def text_of(page: str) -> str:
+    parser = _Text()
+    parser.feed(page)
+    return re.sub(r"\s+", " ", " ".join(parser.parts))
+
+
+def rows(written_status: Status = Status.MANUAL) -> list[CellResult]:
+    return [
+        CellResult("ann", "q1_imaging", "q1a_answer", "q1a_answer",
+                   None if written_status is Status.MANUAL else 0.0, 6.0, written_status,
+                   "marked by hand in formgrader" if written_status is Status.MANUAL
+                   else "left blank: 0", kind=CellKind.MANUAL, code="Ann's answer."),
+        CellResult("ann", "q1_imaging", "q1b_test", "axial_resolution", 2.0, 2.0, Status.OK,
+                   "all cases passed"),
+    ]
+
+
+def marks(score: float, marked: bool, comment: str = "") -> handback.NotebookMarks:
+    return handback.NotebookMarks("ann", "q1_imaging", [
+        handback.Mark("q1a_answer", score, 6.0, True, marked, comment),
+        handback.Mark("q1b_test", 2.0, 2.0, False, True, ""),
+    ])
+
+
+def test_a_marked_answer_shows_its_mark_everywhere():
+    grader = feedback.render("ann", "q1_imaging", rows(), reveal_hidden=False)
+    page = text_of(handback.render(marks(4.5, True, "Good on attenuation."), grader))
+    assert page.count("4.5 / 6") == 2, page         # the table, and the answer's own heading
+    assert "Good on attenuation." in page and "Ann's answer." in page
+    for never in ("– / 6", "not marked", "marked by hand in formgrader", "A marker gives"):
+        assert never not in page, (never, page)
+    assert "Total 6.5 / 8" in page
+
+
+def test_an_unmarked_answer_is_unmarked_everywhere():
+    grader = feedback.render("ann", "q1_imaging", rows(), reveal_hidden=False)
+    page = text_of(handback.render(marks(0.0, False), grader))
+    assert "not marked yet" in page and "/ 6" not in page.replace("out of 6", ""), page
+    assert "some written answers are not marked yet" in page
+
+
+def test_the_graders_own_page_names_no_mark_for_a_written_answer():
+    """Before marking (the page ``grade`` writes) a written answer shows who marks it."""
+    page = text_of(feedback.render("ann", "q1_imaging", rows(), reveal_hidden=False))
+    assert "q1a_answer (written answer) marked by hand out of 6" in page, page
+    assert "– / 6" not in page
+
+
+def test_a_blank_written_answer_keeps_its_zero_and_reason():
+    grader = feedback.render("ann", "q1_imaging", rows(Status.UNANSWERED), reveal_hidden=False)
+    page = text_of(handback.render(marks(0.0, True), grader))
+    assert "left blank: 0" in page and page.count("0 / 6") == 2, page
+
+
+def test_a_comment_is_prose_at_the_pages_size():
+    """Not a <pre> in the table's smaller font; its line breaks kept; escaped."""
+    grader = feedback.render("ann", "q1_imaging", rows(), reveal_hidden=False)
+    page = handback.render(marks(4.5, True, "Line one <b>\nline two."), grader)
+    assert "<td class='comment'>Line one &lt;b&gt;\nline two.</td>" in page
+    assert re.search(r"td\.comment\{white-space:pre-wrap;[^}]*font-size:1\.1em", page)
