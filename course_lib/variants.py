@@ -485,11 +485,13 @@ class Variant:
         (the instructors' model answers use it; a student simply types the letters shown)."""
         return displayed_letters(name, canonical, n_options, self.student)
 
-    def options(self, name: str, texts) -> None:
+    def options(self, name: str, texts=None) -> None:
         """Show a multiple-choice item's options in this student's order, lettered a, b, ...
+        (``texts``: the options in the canonical order; by default the item's own, from
+        :mod:`course_lib.item_options`).
 
         As Markdown in a notebook (so formulas render), as plain lines elsewhere."""
-        text = options_text(name, texts, self.student)
+        text = options_text(name, item_texts(name) if texts is None else texts, self.student)
         try:
             from IPython import get_ipython
             from IPython.display import Markdown, display
@@ -564,7 +566,7 @@ class _NoStudentYet:
     def __init__(self, notebook: str, why: str):
         self._notebook, self._why = notebook, why
 
-    def options(self, name: str, texts) -> None:
+    def options(self, name: str, texts=None) -> None:
         """In place of item ``name``'s options: what to do to see them."""
         print(f"The options of {name} appear here, lettered in your own order, once your "
               "student id is known: type it in STUDENT_ID (near the top) and run that cell, "
@@ -603,6 +605,17 @@ def canonical_letters(name: str, shown: str, n_options: int, student: str) -> st
     """The canonical letters of the options ``student`` sees as ``shown`` (sorted)."""
     order = option_order(name, n_options, student)
     return "".join(sorted(LETTERS[order[LETTERS.index(c)]] for c in shown))
+
+
+def item_texts(name: str) -> tuple[str, ...]:
+    """The options of multiple-choice item ``name`` in the canonical order; ``ValueError`` for
+    an unknown item. (Imported here, not at the top: the grading sandbox runs this module with
+    the standard library alone, and never shows options.)"""
+    from course_lib.item_options import OPTIONS
+
+    if name not in OPTIONS:
+        raise ValueError(f"no multiple-choice item {name!r}; known: {', '.join(sorted(OPTIONS))}")
+    return OPTIONS[name]
 
 
 def options_text(name: str, texts, student: str) -> str:
