@@ -9,7 +9,9 @@ SVG draws the expected and the received answer on top of each other.
 
 The page is built from the grader's results alone: it never reads a test cell, so the hidden
 tests' code (which plain ``nbgrader generate_feedback`` shows, nbgrader #917 and #1363) cannot
-leak. Choice answers are never revealed.
+leak. Choice keys are never printed; an item's explanation (the instructor's notebook's
+explanation cells, :mod:`autograder.explanations`, which the release leaves out) is shown with
+``--reveal-hidden``, after the due date, whatever the verdict.
 """
 
 from __future__ import annotations
@@ -21,8 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import explanations as explanation_cells
+from ..course import source_notebooks
 from ..model import VERDICT_WORDS, CaseRecord, CellKind, CellResult, Verdict
 from .html import e, e_clipped, page, plot_data, svg_lines, value_text, write_page
+from .safe_markdown import markdown2html
 
 _STYLE = """
 .total{font-size:1.1em;color:#444}.msg{margin:.3em 0 .6em}
@@ -45,8 +50,25 @@ MESSAGE_CHARS = 2_000
 REVEAL_ROWS = 20
 
 
-def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = False) -> list[Path]:
-    """Write one page per (student, notebook) that has results; returns the files written."""
+def course_explanations(notebooks: list[Path] | None = None) -> dict[str, dict[str, list[str]]]:
+    """``{notebook: {item: [markdown, ...]}}`` from the instructor's notebooks (by default the
+    course's ``notebooks/q*.ipynb``); a notebook that cannot be read gives none."""
+    found = {}
+    for path in notebooks if notebooks is not None else source_notebooks():
+        try:
+            found[Path(path).stem] = explanation_cells.of_notebook(Path(path))
+        except (OSError, ValueError) as exc:
+            print(f"warning: no explanations from {Path(path).name}: {exc}", file=sys.stderr)
+    return found
+
+
+def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = False,
+              explanations: dict[str, dict[str, list[str]]] | None = None) -> list[Path]:
+    """Write one page per (student, notebook) that has results; returns the files written.
+    ``explanations`` (default: :func:`course_explanations`, read only when ``reveal_hidden``)
+    are shown under their items when ``reveal_hidden``."""
+    if reveal_hidden and explanations is None:
+        explanations = course_explanations()
     by_key: dict[tuple[str, str], list[CellResult]] = {}
     for r in results:
         by_key.setdefault((r.student, r.notebook), []).append(r)
@@ -55,7 +77,8 @@ def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = Fal
         path = Path(folder) / student / f"{notebook}.html"
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            write_page(path, render(student, notebook, rows, reveal_hidden))
+            write_page(path, render(student, notebook, rows, reveal_hidden,
+                                    (explanations or {}).get(notebook, {})))
         except Exception:  # noqa: BLE001 - one bad page never stops the others
             traceback.print_exc()
             print(f"error: the feedback of {student}/{notebook} could not be written",
@@ -65,21 +88,25 @@ def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = Fal
     return written
 
 
-def render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: bool) -> str:
+def render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: bool,
+           explanations: dict[str, list[str]] | None = None) -> str:
     """The feedback page of one student's notebook, under :data:`PAGE_CHARS` whatever the
     submission: a page that would be longer is drawn again without the code and output shown
-    back, and with each message cut to :data:`MESSAGE_CHARS`."""
-    text = _render(student, notebook, rows, reveal_hidden)
+    back, and with each message cut to :data:`MESSAGE_CHARS`. With ``reveal_hidden`` each item
+    named in ``explanations`` is followed by its explanation."""
+    shown = explanations if reveal_hidden else None
+    text = _render(student, notebook, rows, reveal_hidden, explanations=shown)
     if len(text) <= PAGE_CHARS:
         return text
     slim = [dataclasses.replace(r, code="", printed="", message=r.message[:MESSAGE_CHARS])
             for r in rows]
     return _render(student, notebook, slim, reveal_hidden, note=(
-        "This page would have been too long: your code and its printed output are not shown."))
+        "This page would have been too long: your code and its printed output are not shown."),
+        explanations=shown)
 
 
 def _render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: bool,
-            note: str = "") -> str:
+            note: str = "", explanations: dict[str, list[str]] | None = None) -> str:
     auto = [r for r in rows if r.kind is not CellKind.MANUAL]
     manual = [r for r in rows if r.kind is CellKind.MANUAL]
     got = sum(r.score or 0.0 for r in auto)
@@ -94,7 +121,7 @@ def _render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: 
     if reveal_hidden:
         body.append("<p class='note'>The failing hidden cases are shown in full (released after "
                     "the deadline).</p>")
-    body += [_cell_html(r, reveal_hidden) for r in rows]
+    body += [_cell_html(r, reveal_hidden) + _explanation_html(r, explanations) for r in rows]
     return page(f"{notebook}: feedback for {student}", body, _STYLE)
 
 
@@ -109,8 +136,18 @@ def _cell_html(r: CellResult, reveal: bool) -> str:
         parts += _hidden_html([c for c in r.cases if not c.visible], reveal)
     elif (r.kind in (CellKind.CHOICE, CellKind.VALUE) and reveal and r.cases
           and r.cases[0].verdict is not Verdict.PASS):
-        parts.append("<p class='note'>See the model answer in the released solutions.</p>")
+        parts.append("<p class='note'>Its explanation follows; see the model answer in the "
+                     "released solutions.</p>")
     return "\n".join(parts + _outputs(r))
+
+
+def _explanation_html(r: CellResult, explanations: dict[str, list[str]] | None) -> str:
+    """Item ``r``'s explanation (the instructor's markdown, rendered and sanitised)."""
+    if not explanations or not explanations.get(r.name):
+        return ""
+    text = "\n\n".join(explanations[r.name])
+    return ("\n<details class='explanation' open><summary>explanation of this item</summary>"
+            f"{markdown2html({}, text)}</details>")
 
 
 def _visible_html(visible: list[CaseRecord]) -> list[str]:
