@@ -116,6 +116,16 @@ OPTIONS: dict[str, tuple[str, ...]] = {
         'is exact for every ring, because the holes are parallel to the axis and so to '
         'the photons',
     ),
+    'q3_item1': (
+        'At the mid-point of the edge: the table names only the edge, so each vertex goes'
+        ' to its centre.',
+        'Where the data, varying linearly along the edge between its two end values, '
+        'equal the iso-level.',
+        'At the end whose value is nearer to the iso-level, so that every vertex lies on '
+        'a measured sample.',
+        'At a fraction of the edge stored in the table for the case, the same in every '
+        'cell of that case.',
+    ),
     'q3_item2': (
         '23 classes, of which 22 need triangles',
         '15 classes, and every one of the 15 needs triangles',
@@ -139,12 +149,12 @@ OPTIONS: dict[str, tuple[str, ...]] = {
         'pointing inwards, and the back-facing patch looks like a hole.',
     ),
     'q3_item5': (
-        'closed and convex, with triangles of similar area so that no prism dominates the'
-        ' sum',
-        'closed, with $\\hat{\\mathbf n}$ taken separately for each triangle as its own '
-        'unit normal',
+        'closed, free of self-intersections, manifold, and convex',
+        "closed, manifold, consistently ordered, with $\\hat{\\mathbf n}$ each triangle's "
+        'own unit normal',
         'closed, free of self-intersections, manifold, and consistently ordered',
-        'consistently ordered only: at a gap the prisms on the two sides still cancel',
+        'free of self-intersections, manifold and consistently ordered, with gaps allowed'
+        ' (their prisms cancel)',
     ),
     'q4_item1': (
         '$3N + 1$, as for a chain of Bézier pieces that share only their end points.',
@@ -157,8 +167,8 @@ OPTIONS: dict[str, tuple[str, ...]] = {
         ' on its last.',
         'A Catmull-Rom segment passes through the second and third points of its geometry'
         ' matrix.',
-        'The Catmull-Rom weights add up to 1, so the curve stays in the convex hull of '
-        'its points.',
+        'The Catmull-Rom weights are never negative, so the curve stays in the convex '
+        'hull of its points.',
         'Where segments join, the uniform cubic B-spline is C² but the Catmull-Rom spline'
         ' only C¹.',
         'Both splines take the same four-point geometry matrix; only the basis matrix '
@@ -192,14 +202,14 @@ OPTIONS: dict[str, tuple[str, ...]] = {
         'c$, before the unknown region.',
     ),
     'q4_item8': (
-        'Use $\\mathbf d = \\mathbf b$: of the two rules it is the only one that makes the '
-        'B-spline pass through $\\mathbf c$.',
-        'Use $\\mathbf d = 2\\mathbf c - \\mathbf b$: it brings the camera to rest exactly '
-        'on the last given point $\\mathbf c$.',
-        'Neither: no choice of phantom point can make a B-spline pass through its last '
-        'given point.',
-        'It depends: $\\mathbf d = \\mathbf b$ ends at rest but short of $\\mathbf c$; '
-        '$\\mathbf d = 2\\mathbf c - \\mathbf b$ ends on $\\mathbf c$, still moving.',
+        '$\\mathbf d = \\mathbf b$ ends the path exactly on $\\mathbf c$, at rest; $\\mathbf '
+        'd = 2\\mathbf c - \\mathbf b$ carries it on beyond $\\mathbf c$.',
+        '$\\mathbf d = \\mathbf b$ stops the camera at rest short of $\\mathbf c$; $\\mathbf '
+        'd = 2\\mathbf c - \\mathbf b$ ends on $\\mathbf c$, still moving.',
+        'Both rules end the path exactly on $\\mathbf c$; they differ only in how fast the'
+        ' camera is moving when it gets there.',
+        'Neither rule reaches $\\mathbf c$: a uniform cubic B-spline never passes through '
+        'any of the points it is given.',
     ),
     'q5_item1': (
         "It gives the highlight more of the surface's own colour $c_\\lambda$, as in the "

@@ -204,3 +204,22 @@ EXERCISES.append(number_item(
     "q2c_your_length", "q2_nuclear",
     lambda v: float(gamma_camera.collimator_length_for_resolution(v.d, v.R, v.z)),
     "Q2(c) on your numbers: the hole length L (mm) that gives resolution R at z"))
+
+
+def _your_percent(v) -> float:
+    """Q2(d) on the student's numbers: the exam's model through the course's references."""
+    holes = gamma_camera.ring_hole_positions(v.pitch, v.rings)
+    return 100.0 * float(gamma_camera.open_fraction(holes, v.hole_d, v.hole_L, v.source_distance,
+                                                    (v.rings + 1) * v.pitch))
+
+
+# Q2(d) on the student's own numbers, asked before the exam's numbers are worked: the cut-off
+# radius (mm) and the percentage of the photons that reach the back.
+EXERCISES += [
+    number_item("q2d_your_cutoff", NB,
+                lambda v: float(gamma_camera.exam_cutoff_radius(v.hole_d, v.hole_L,
+                                                                v.source_distance)),
+                "Q2(d) on your numbers: the radius out to which the holes are open (mm)"),
+    number_item("q2d_your_percent", NB, _your_percent,
+                "Q2(d) on your numbers: the percentage of the photons that reach the back"),
+]

@@ -207,9 +207,9 @@ EXERCISES = [
     Exercise(name="q4_item7", notebook=NB, kind="choice", answer="c",
              options=("a", "b", "c", "d"),
              description="Q4(c)(ii) d = b suits Catmull-Rom: the end tangent is not imposed"),
-    Exercise(name="q4_item8", notebook=NB, kind="choice", answer="d",
+    Exercise(name="q4_item8", notebook=NB, kind="choice", answer="b",
              options=("a", "b", "c", "d"),
-             description="Q4(c)(ii) B-spline: rest at (b+2c)/3 vs reaching c with speed"),
+             description="Q4(c)(ii) B-spline: d = b rests at (b+2c)/3, d = 2c - b ends on c moving"),
 ]
 
 

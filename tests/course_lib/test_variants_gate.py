@@ -130,25 +130,30 @@ def test_q2d_cutoff_and_fraction_discriminate(numbers):
     # same holes
     _assert_all(np.abs(cut / pitch - np.round(cut / pitch)) >= 0.2 - 1e-9,
                 "Q2(d) the cut-off well away from every ring")
-    right = [gamma_camera.open_fraction(gamma_camera.ring_hole_positions(v["pitch"], v["rings"]),
-                                        v["hole_d"], v["hole_L"], v["source_distance"],
-                                        (v["rings"] + 1) * v["pitch"]) for v in rows]
-    _assert_all(np.isclose(right, [_q2d_fraction(v, c) for v, c in zip(rows, cut)],
+    right = 100 * np.array([gamma_camera.open_fraction(
+        gamma_camera.ring_hole_positions(v["pitch"], v["rings"]), v["hole_d"], v["hole_L"],
+        v["source_distance"], (v["rings"] + 1) * v["pitch"]) for v in rows])
+    _assert_all(np.isclose(right, [100 * _q2d_fraction(v, c) for v, c in zip(rows, cut)],
                            rtol=1e-12, atol=0), "Q2(d) the reference agrees with ring counting")
-    if "q2d_your_fraction" not in REGISTRY:
-        pytest.skip("the Q2(d) items on the student's numbers are not registered")
     inverted = np.array([v["hole_d"] * v["hole_L"] / v["source_distance"] for v in rows])
     _assert_all(_rejected_all("q2d_your_cutoff", cut, inverted), "Q2(d) mistake 'L / z for z / L'")
+    reference_cut = [gamma_camera.exam_cutoff_radius(v["hole_d"], v["hole_L"],
+                                                     v["source_distance"]) for v in rows]
+    _assert_all(np.isclose(reference_cut, cut, rtol=1e-12), "Q2(d) the reference's cut-off")
     mistakes = {
         "8 holes on every ring": [_q2d_fraction(v, c, lambda k: 8) for v, c in zip(rows, cut)],
         "every hole open": [_q2d_fraction(v, np.inf) for v in rows],
-        "the diameter taken as the radius": [4 * r for r in right],
+        "the diameter taken as the radius": [4 * r / 100 for r in right],
         "the face radius taken as rings x pitch": [
-            r * ((v["rings"] + 1) / v["rings"]) ** 2 for r, v in zip(right, rows)],
+            r / 100 * ((v["rings"] + 1) / v["rings"]) ** 2 for r, v in zip(right, rows)],
         "one ring too many open": [_q2d_fraction(v, c + v["pitch"]) for v, c in zip(rows, cut)],
+        "one ring too few open": [_q2d_fraction(v, c - v["pitch"]) for v, c in zip(rows, cut)],
     }
+    _assert_all(_rejected_all("q2d_your_percent", right, right / 100),
+                "Q2(d) mistake 'a fraction for the percentage'")
     for what, wrong in mistakes.items():
-        _assert_all(_rejected_all("q2d_your_fraction", right, wrong), f"Q2(d) mistake '{what}'")
+        _assert_all(_rejected_all("q2d_your_percent", right, 100 * np.array(wrong)),
+                    f"Q2(d) mistake '{what}'")
 
 
 # --------------------------------------------------------------------------------- Q3(a)
