@@ -7,7 +7,7 @@ Kept here rather than in the notebooks so that an item's options cell shows only
 Only the texts: which options are right is known to the grader alone.
 """
 
-OPTIONS: dict[str, tuple[str, ...]] = {
+OPTIONS = {
     'q1_item1': (
         'the attenuation coefficient of the one small piece of tissue lying directly '
         'above that detector point',
