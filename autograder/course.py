@@ -28,6 +28,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from . import explanations
+
 #: The nbgrader assignment that holds all six question notebooks.
 ASSIGNMENT = "tripos2006"
 #: The nbgrader course id.
@@ -324,6 +326,8 @@ def _prepare(course: CourseDir, notebooks: list[Path], names: list[str]) -> Cour
         _backup_student_work(course, stamp)
         shutil.rmtree(course.release_dir, ignore_errors=True)
     run_nbgrader(["generate_assignment", ASSIGNMENT, "--force"], root, db_url)
+    for released_nb in course.release_dir.glob("*.ipynb"):
+        explanations.strip(released_nb)      # an item's explanation comes with the feedback
     released = sorted(p.name for p in course.release_dir.glob("*.ipynb"))
     if released != expected:
         raise RuntimeError(f"generate_assignment released {released}, expected {expected}")

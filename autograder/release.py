@@ -4,7 +4,8 @@ The student notebooks come out of nbgrader's own ``generate_assignment`` (run in
 course root, ``course/`` at the repository root unless ``--course-root`` says otherwise, whose
 gradebook then holds the assignment for grading). They are copied to ``--out/tripos2006/`` only
 after a leak check: no solution or hidden-test delimiters, no import of the in-kernel checker
-(``autograder.incell``), no model answer of a manually graded cell, no outputs; and every
+(``autograder.incell``), no model answer of a manually graded cell, no item's explanation
+(:mod:`autograder.explanations`: it comes with the feedback), no outputs; and every
 solution and test code cell tagged ``raises-exception``, so that Run All on an untouched release
 runs past the stubs to every figure and explorer. With ``--out`` the command also writes what
 students install, ``--out/student/`` (a wheel of ``course_lib`` whose graded references are
@@ -23,7 +24,7 @@ from pathlib import Path
 
 import nbformat
 
-from . import student_bundle
+from . import explanations, student_bundle
 from .course import (
     ASSIGNMENT,
     DEFAULT_COURSE_ROOT,
@@ -70,6 +71,9 @@ def leaks(notebook: Path) -> list[str]:
         if (cell.cell_type == "markdown" and meta.get("solution") and meta.get("grade")
                 and cell.source.strip() != TEXT_STUB):
             problems.append(f"{where}: a manually graded answer cell is not the stub {TEXT_STUB!r}")
+        if explanations.is_explanation(cell):
+            problems.append(f"{where}: an item's explanation (it reaches students with the "
+                            "feedback, not in the release)")
         if cell.cell_type == "code" and (cell.get("outputs") or cell.get("execution_count")):
             problems.append(f"{where}: carries outputs")
     return problems

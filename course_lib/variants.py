@@ -29,7 +29,9 @@ True
 >>> v.numbers == variant("q2_nuclear", "cd456").numbers
 False
 >>> sorted(v.numbers)
-['R', 'd', 'z']
+['R', 'd', 'hole_L', 'hole_d', 'pitch', 'rings', 'source_distance', 'z']
+>>> problems("q2_nuclear", v.numbers)            # every condition of the draw holds
+[]
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["ASSIGNMENT", "NOTEBOOKS", "Variant", "variant", "my_variant", "student_id",
+__all__ = ["ASSIGNMENT", "NOTEBOOKS", "Variant", "variant", "problems", "my_variant", "student_id",
            "option_order", "displayed_letters", "canonical_letters"]
 
 ASSIGNMENT = "tripos2006"
@@ -141,13 +143,42 @@ class _Draw:
 
 # --------------------------------------------------------------------------------------------
 # each notebook's numbers
+#
+# Every generator draws, then checks its numbers against its conditions (``_qN_problems``: the
+# numbers are well posed, not degenerate, and the quantity asked for cannot be read off without
+# the item's arithmetic) and draws again, from the same hash stream, until none is left. The
+# conditions are written so that every mistake the notebook or its rubric names lands outside
+# the number items' tolerance (0.5 % or 0.001); tests/course_lib/test_variants_gate.py computes
+# those mistaken answers for 10,000 ids and checks it.
 
+#: Draws before a generator gives up (none comes close: the conditions keep a fair share).
+MAX_DRAWS = 2000
+
+
+def _until_sound(draw: _Draw, make, problems) -> dict:
+    """``make(draw)`` again and again until ``problems(numbers)`` is empty."""
+    for _ in range(MAX_DRAWS):
+        numbers = make(draw)
+        if not problems(numbers):
+            return numbers
+    raise RuntimeError("no sound variant found: the conditions are too strict")  # pragma: no cover
+
+
+def _dot(a, b) -> float:
+    return sum(x * y for x, y in zip(a, b))
+
+
+# Q1(c): nominal speeds (m/s). The notebook says sound is slowest in fat, and ranks the tissues
+# by speed; a student's jittered speeds keep that ranking.
 _TISSUES = (("fat", 1450.0), ("water", 1480.0), ("kidney", 1560.0), ("liver", 1570.0),
             ("blood", 1575.0), ("muscle", 1585.0))
+_RANK = {name: k for k, (name, _) in enumerate(_TISSUES)}
+#: Smallest gap (m/s) between a layer's speed and the scanner's 1540 m/s, and between the
+#: speeds of two layers: at 10 m/s the speed correction is 0.65 %, above the tolerance.
+_SPEED_GAP = 10.0
 
 
-def _q1_imaging(draw: _Draw) -> dict:
-    """Q1(c): a stack of three layers under the probe (mm and m/s)."""
+def _q1_draw(draw: _Draw) -> dict:
     picked = []
     while len(picked) < 3:
         tissue = draw.pick("tissue", _TISSUES)
@@ -158,15 +189,74 @@ def _q1_imaging(draw: _Draw) -> dict:
             "thicknesses": tuple(draw.grid("thickness", 10.0, 50.0, 5.0) for _ in picked)}
 
 
-def _q2_nuclear(draw: _Draw) -> dict:
-    """Q2(c): hole diameter d, source distance z and the resolution R wanted there (mm)."""
+def _q1_problems(v: dict) -> list[str]:
+    """Q1(c): the jitter keeps the table's order (fat slowest), no two layers share a speed, and
+    every layer is at least 10 m/s from 1540 m/s (so neither the uncorrected thickness nor the
+    inverted ratio c/1540 comes within the tolerance)."""
+    out = []
+    pairs = list(zip(v["tissues"], v["speeds"]))
+    for (t1, c1) in pairs:
+        for (t2, c2) in pairs:
+            if _RANK[t1] < _RANK[t2] and not c1 + _SPEED_GAP <= c2:
+                out.append(f"{t1} not slower than {t2}")
+    if any(abs(c - 1540.0) < _SPEED_GAP for c in v["speeds"]):
+        out.append("a speed too close to the scanner's 1540 m/s")
+    return out
+
+
+def _q1_imaging(draw: _Draw) -> dict:
+    """Q1(c): a stack of three layers under the probe (mm and m/s)."""
+    return _until_sound(draw, _q1_draw, _q1_problems)
+
+
+def _q2c_draw(draw: _Draw) -> dict:
     d = draw.grid("d", 1.0, 3.0, 0.5)
     return {"d": d, "z": draw.grid("z", 50.0, 200.0, 10.0),
             "R": round(d + draw.grid("R", 1.0, 6.0, 0.5), 1)}
 
 
-def _q3_marching_cubes(draw: _Draw) -> dict:
-    """Q3(a): one crossed cell edge (end points, values, iso-level), and one cell's corners."""
+def _q2d_draw(draw: _Draw) -> dict:
+    """The collimator first, then a source distance among those that suit it (if any)."""
+    v = {"hole_d": draw.grid("hole_d", 1.0, 2.0, 0.5),
+         "hole_L": draw.grid("hole_L", 20.0, 60.0, 5.0),
+         "pitch": draw.grid("pitch", 5.0, 12.0, 1.0),
+         "rings": int(draw.grid("rings", 3.0, 6.0, 1.0)), "source_distance": 0.0}
+    suit = [z for z in range(200, 1501, 50) if not _q2_problems({**v, "source_distance": z})]
+    v["source_distance"] = float(draw.pick("source_distance", suit or [0]))
+    return v
+
+
+def _q2_open_rings(v: dict) -> float:
+    """How many pitches the cut-off radius d z / L of Q2(d) spans (a float)."""
+    return v["hole_d"] * v["source_distance"] / v["hole_L"] / v["pitch"]
+
+
+def _q2_problems(v: dict) -> list[str]:
+    """Q2(c): R - d is not d (the swapped ratio z (R - d) / d would give the right length).
+    Q2(d): the cut-off radius opens at least two rings and closes at least one, and lies at
+    least a fifth of a pitch from every ring (the boundary convention decides nothing)."""
+    out = []
+    if "R" in v and abs((v["R"] - v["d"]) - v["d"]) < 0.5:
+        out.append("R - d too close to d")
+    if "pitch" not in v:
+        return out
+    k = _q2_open_rings(v)
+    if not 2.2 <= k <= v["rings"] - 0.8:
+        out.append("the cut-off does not fall between the second and the last ring")
+    if abs(k - round(k)) < 0.2:
+        out.append("the cut-off too close to a ring")
+    return out
+
+
+def _q2_nuclear(draw: _Draw) -> dict:
+    """Q2(c): hole diameter d, source distance z and the resolution R wanted there (mm).
+    Q2(d): a ring collimator (hole diameter and length, ring pitch, number of rings; its face's
+    radius is (rings + 1) pitch) and the distance of an on-axis point source (mm)."""
+    return {**_until_sound(draw, _q2c_draw, _q2_problems),
+            **_until_sound(draw, _q2d_draw, _q2_problems)}
+
+
+def _q3_draw(draw: _Draw) -> dict:
     iso = draw.grid("iso", 50.0, 150.0, 10.0)
     below, above = draw.grid("below", 1.0, 40.0, 1.0), draw.grid("above", 1.0, 40.0, 1.0)
     v0, v1 = (iso - below, iso + above) if draw.unit("side") < 0.5 else (iso + above, iso - below)
@@ -179,46 +269,177 @@ def _q3_marching_cubes(draw: _Draw) -> dict:
     return {"p0": p0, "p1": p1, "v0": v0, "v1": v1, "iso": iso, "corner_values": corners}
 
 
-def _q4_splines(draw: _Draw) -> dict:
-    """Q4(c): the last three given points a, b, c of a curve, a spline kind and an end rule."""
+def _q3_problems(v: dict) -> list[str]:
+    """Q3(a): the edge is crossed at least a tenth of its length from its mid-point and from
+    either end (so the mid-point, the mirror-image fraction taken from the wrong end and the
+    end nearer the iso-level all miss by more than the tolerance on coordinates up to 10), and
+    the cell's corners are neither all in nor all out."""
+    out = []
+    t = (v["iso"] - v["v0"]) / (v["v1"] - v["v0"])
+    if not 0.0 < t < 1.0:
+        out.append("the edge is not crossed")
+    elif abs(t - 0.5) < 0.1 or min(t, 1.0 - t) < 0.1:
+        out.append("the crossing too close to the mid-point or to an end")
+    below = [c < v["iso"] for c in v["corner_values"]]
+    if all(below) or not any(below) or v["iso"] in v["corner_values"]:
+        out.append("the cell is not cut cleanly")
+    return out
+
+
+def _q3_marching_cubes(draw: _Draw) -> dict:
+    """Q3(a): one crossed cell edge (end points, values, iso-level), and one cell's corners."""
+    return _until_sound(draw, _q3_draw, _q3_problems)
+
+
+#: Q4(c)(i): the spline kinds and end rules asked for. The B-spline with d = 2c - b is left
+#: out: it ends at (c, c - b, 0), which needs no arithmetic.
+_Q4_CASES = (("catmull-rom", "d=b"), ("catmull-rom", "d=2c-b"), ("b-spline", "d=b"))
+
+
+def _q4_draw(draw: _Draw) -> dict:
     points = []
     while len(points) < 3:
         p = (draw.grid("x", -5.0, 5.0, 1.0), draw.grid("y", -5.0, 5.0, 1.0))
         if p not in points:
             points.append(p)
-    return {"a": points[0], "b": points[1], "c": points[2],
-            "kind": draw.pick("kind", ("catmull-rom", "b-spline")),
-            "rule": draw.pick("rule", ("d=b", "d=2c-b"))}
+    kind, rule = draw.pick("case", _Q4_CASES)
+    return {"a": points[0], "b": points[1], "c": points[2], "kind": kind, "rule": rule}
 
 
-def _q5_phong(draw: _Draw) -> dict:
-    """Q5(b): normal, light and view directions (not unit), coefficients and colour."""
-    while True:
-        N, L, V = (tuple(draw.grid(k, -3.0, 3.0, 1.0) for _ in range(3)) for k in "NLV")
-        nn, ll, vv = (sum(x * x for x in w) for w in (N, L, V))
-        if min(nn, ll, vv) == 0:
-            continue
-        ln = sum(a * b for a, b in zip(L, N))
-        R = tuple(2 * ln / nn * n - l for n, l in zip(N, L))
-        rv = sum(r * v for r, v in zip(R, V)) / (ll * vv) ** 0.5
-        if ln / (ll * nn) ** 0.5 > 0.2 and 0.2 < rv < 0.98:
-            break
-    return {"N": N, "L": L, "V": V, "n": draw.pick("n", (2, 3, 4, 5, 8, 10)),
+def _q4_problems(v: dict) -> list[str]:
+    """Q4(c)(i): three distinct points, not on one line (the end's acceleration is then never
+    zero and no two rules or kinds give the same end), and no trivial case."""
+    (ax, ay), (bx, by), (cx, cy) = v["a"], v["b"], v["c"]
+    out = []
+    if (bx - ax) * (cy - by) - (by - ay) * (cx - bx) == 0:
+        out.append("a, b, c on one line")
+    if (v["kind"], v["rule"]) not in _Q4_CASES:
+        out.append("a case read off without arithmetic")
+    return out
+
+
+def _q4_splines(draw: _Draw) -> dict:
+    """Q4(c): the last three given points a, b, c of a curve, a spline kind and an end rule."""
+    return _until_sound(draw, _q4_draw, _q4_problems)
+
+
+def _q5_direction(draw: _Draw, name: str) -> tuple:
+    return tuple(draw.grid(name, -3.0, 3.0, 1.0) for _ in range(3))
+
+
+def _q5_coefficients(draw: _Draw) -> dict:
+    return {"n": draw.pick("n", (2, 3, 4, 5, 8, 10)),
             "Ia": draw.grid("Ia", 0.5, 1.0, 0.1), "Ip": draw.grid("Ip", 0.5, 1.0, 0.1),
             "ka": draw.grid("ka", 0.1, 0.5, 0.1), "kd": draw.grid("kd", 0.2, 0.8, 0.1),
             "ks": draw.grid("ks", 0.2, 0.8, 0.1),
             "colour": tuple(draw.grid("colour", 0.0, 1.0, 0.1) for _ in range(3))}
 
 
+def _q5_cosines(v: dict) -> tuple[float, float, float] | None:
+    """(L.N, V.N, R.V) as cosines, or None when a vector is zero or of unit length."""
+    N, L, V = v["N"], v["L"], v["V"]
+    nn, ll, vv = _dot(N, N), _dot(L, L), _dot(V, V)
+    if min(nn, ll, vv) <= 1:
+        return None
+    R = tuple(2 * _dot(L, N) / nn * n - l for n, l in zip(N, L))
+    return (_dot(L, N) / (ll * nn) ** 0.5, _dot(V, N) / (vv * nn) ** 0.5,
+            _dot(R, V) / (ll * vv) ** 0.5)
+
+
+def _q5_geometry_problems(v: dict) -> list[str]:
+    cosines = _q5_cosines(v)
+    if cosines is None:
+        return ["a zero-length or unit vector"]
+    ln, vn, rv = cosines
+    out = []
+    if ln <= 0.2:
+        out.append("the light behind or grazing the surface")
+    if vn <= 0.2:
+        out.append("the viewer behind or edge-on to the surface")
+    if not 0.5 < rv < 0.98:
+        out.append("the highlight missed, faint or head-on")
+    return out
+
+
+def _q5_problems(v: dict) -> list[str]:
+    """Q5(b): no vector of unit length (so that normalising matters), the light and the viewer
+    in front of the surface (cosines with N above 0.2), a highlight neither missed nor head-on
+    (0.5 < R.V < 0.98, cosines) and worth at least 0.05 (so that leaving it out, or colouring it
+    with c, misses by more than the tolerance), a surface colour with a channel at most 0.5, and
+    coefficients that keep every channel at most 1."""
+    out = _q5_geometry_problems(v)
+    if out:
+        return out
+    if v["Ip"] * v["ks"] * _q5_cosines(v)[2] ** v["n"] < 0.05:
+        out.append("the highlight too faint to matter")
+    if min(v["colour"]) > 0.5:
+        out.append("a surface almost white: a coloured highlight would look right")
+    if max(v["colour"]) * (v["Ia"] * v["ka"] + v["Ip"] * v["kd"]) + v["Ip"] * v["ks"] > 1:
+        out.append("a channel could exceed 1")
+    return out
+
+
+def _q5_phong(draw: _Draw) -> dict:
+    """Q5(b): normal, light and view directions (not unit), coefficients and colour: the
+    directions are drawn until they are sound, then the coefficients until everything is."""
+    N = _until_sound(draw, lambda d: {"N": _q5_direction(d, "N")},
+                     lambda v: [] if _dot(v["N"], v["N"]) > 1 else ["N zero or unit"])["N"]
+    L = _until_sound(draw, lambda d: {"L": _q5_direction(d, "L")},
+                     lambda v: [] if _dot(v["L"], v["L"]) > 1 and _dot(v["L"], N) > 0.2 * (
+                         _dot(N, N) * _dot(v["L"], v["L"])) ** 0.5 else ["L unsound"])["L"]
+    geometry = _until_sound(draw, lambda d: {"N": N, "L": L, "V": _q5_direction(d, "V")},
+                            _q5_geometry_problems)
+    return _until_sound(draw, lambda d: {**geometry, **_q5_coefficients(d)}, _q5_problems)
+
+
+def _q6_vertex(draw: _Draw, role: str) -> tuple:
+    """One vertex [X, Y, Z, w] (integers, w from 2 to 5): ``"in"`` strictly inside the view
+    volume, ``"edge"`` inside on at least one of its planes, ``"out"`` outside one of them."""
+    w = draw.grid("w", 2.0, 5.0, 1.0)
+    X, Y = (draw.grid("xy", -w + 1, w - 1, 1.0) for _ in range(2))
+    Z = draw.grid("z", 1.0, w - 1, 1.0)
+    if role == "in":
+        return (X, Y, Z, w)
+    plane = int(draw.unit("plane") * 6)
+    if role == "edge":
+        at = (w, -w, w, -w, 0.0, w)[plane]
+    else:
+        at = draw.grid("beyond", 1.0, 4.0, 1.0)
+        at = (w + at, -w - at, w + at, -w - at, -at, w + at)[plane]
+    xyz = [X, Y, Z]
+    xyz[plane // 2] = at
+    return (*xyz, w)
+
+
+def _q6_draw(draw: _Draw) -> dict:
+    roles = ["in", "edge", "out"]
+    order = draw.permutation("roles", 3)
+    return {"vertices": tuple(_q6_vertex(draw, roles[k]) for k in order)}
+
+
+def _q6_problems(v: dict) -> list[str]:
+    """Q6(b): one vertex strictly inside, one inside on a boundary plane (so strict inequalities
+    change the answer, and the six inequalities, not the boundary rule alone, decide the other),
+    one outside (something is clipped; with an inside vertex, never everything); w > 1
+    everywhere (the divide changes every vertex)."""
+    rows = v["vertices"]
+    strict = [w > 0 and -w < X < w and -w < Y < w and 0 < Z < w for X, Y, Z, w in rows]
+    inside = [_inside(r) for r in rows]
+    out = []
+    if not any(strict):
+        out.append("no vertex strictly inside")
+    if not any(i and not s for i, s in zip(inside, strict)):
+        out.append("no vertex on a boundary plane")
+    if all(inside):
+        out.append("nothing outside")
+    if any(r[3] <= 1 for r in rows):
+        out.append("w = 1 makes the divide a no-op")
+    return out
+
+
 def _q6_clipping(draw: _Draw) -> dict:
     """Q6(b): a triangle's vertices in homogeneous screen coordinates [X Y Z w]."""
-    rows = []
-    while len(rows) < 3 or all(_inside(r) for r in rows) or not any(_inside(r) for r in rows):
-        rows = []
-        for _ in range(3):
-            w = draw.grid("w", 1.0, 4.0, 1.0)
-            rows.append(tuple(draw.grid("xyz", -5.0, 5.0, 1.0) for _ in range(3)) + (w,))
-    return {"vertices": tuple(rows)}
+    return _until_sound(draw, _q6_draw, _q6_problems)
 
 
 def _inside(row) -> bool:
@@ -226,6 +447,9 @@ def _inside(row) -> bool:
     return w > 0 and abs(X) <= w and abs(Y) <= w and 0 <= Z <= w
 
 
+_PROBLEMS = {"q1_imaging": _q1_problems, "q2_nuclear": _q2_problems,
+             "q3_marching_cubes": _q3_problems, "q4_splines": _q4_problems,
+             "q5_phong": _q5_problems, "q6_clipping": _q6_problems}
 _NUMBERS = {"q1_imaging": _q1_imaging, "q2_nuclear": _q2_nuclear,
             "q3_marching_cubes": _q3_marching_cubes, "q4_splines": _q4_splines,
             "q5_phong": _q5_phong, "q6_clipping": _q6_clipping}
@@ -261,11 +485,13 @@ class Variant:
         (the instructors' model answers use it; a student simply types the letters shown)."""
         return displayed_letters(name, canonical, n_options, self.student)
 
-    def options(self, name: str, texts) -> None:
+    def options(self, name: str, texts=None) -> None:
         """Show a multiple-choice item's options in this student's order, lettered a, b, ...
+        (``texts``: the options in the canonical order; by default the item's own, from
+        :mod:`course_lib.item_options`).
 
         As Markdown in a notebook (so formulas render), as plain lines elsewhere."""
-        text = options_text(name, texts, self.student)
+        text = options_text(name, item_texts(name) if texts is None else texts, self.student)
         try:
             from IPython import get_ipython
             from IPython.display import Markdown, display
@@ -295,6 +521,14 @@ def variant(notebook: str, student: str) -> Variant:
     if not sid:
         raise ValueError("student must be a non-empty id")
     return Variant(notebook, sid, _NUMBERS[notebook](_Draw(sid, notebook)))
+
+
+def problems(notebook: str, numbers: dict) -> list[str]:
+    """The conditions of ``notebook``'s generator that ``numbers`` break (empty: a sound
+    variant). ``ValueError`` for an unknown notebook."""
+    if notebook not in _PROBLEMS:
+        raise ValueError(f"notebook must be one of {NOTEBOOKS}, got {notebook!r}")
+    return _PROBLEMS[notebook](numbers)
 
 
 def my_variant(notebook: str, typed: str = "", *, quiet: bool = False,
@@ -332,7 +566,7 @@ class _NoStudentYet:
     def __init__(self, notebook: str, why: str):
         self._notebook, self._why = notebook, why
 
-    def options(self, name: str, texts) -> None:
+    def options(self, name: str, texts=None) -> None:
         """In place of item ``name``'s options: what to do to see them."""
         print(f"The options of {name} appear here, lettered in your own order, once your "
               "student id is known: type it in STUDENT_ID (near the top) and run that cell, "
@@ -371,6 +605,17 @@ def canonical_letters(name: str, shown: str, n_options: int, student: str) -> st
     """The canonical letters of the options ``student`` sees as ``shown`` (sorted)."""
     order = option_order(name, n_options, student)
     return "".join(sorted(LETTERS[order[LETTERS.index(c)]] for c in shown))
+
+
+def item_texts(name: str) -> tuple[str, ...]:
+    """The options of multiple-choice item ``name`` in the canonical order; ``ValueError`` for
+    an unknown item. (Imported here, not at the top: the grading sandbox runs this module with
+    the standard library alone, and never shows options.)"""
+    from course_lib.item_options import OPTIONS
+
+    if name not in OPTIONS:
+        raise ValueError(f"no multiple-choice item {name!r}; known: {', '.join(sorted(OPTIONS))}")
+    return OPTIONS[name]
 
 
 def options_text(name: str, texts, student: str) -> str:

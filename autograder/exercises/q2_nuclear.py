@@ -179,22 +179,22 @@ EXERCISES = [
     _function("open_fraction", gamma_camera.open_fraction, _open_fraction_cases,
               "Q2(d) all-or-nothing model: open area / face area"),
     # Q2(a): why each dynode is more positive than the last
-    Exercise(name="q2a_dynode_potential", notebook=NB, kind="choice", answer="c",
+    Exercise(name="q2_item1", notebook=NB, kind="choice", answer="c",
              options=_ABCD, description="Q2(a) the rising dynode potentials accelerate the "
                                         "electrons so that each impact frees several"),
     # Q2(b): select all that apply
-    Exercise(name="q2b_properties", notebook=NB, kind="choice",
+    Exercise(name="q2_item2", notebook=NB, kind="choice",
              answer=frozenset({"a", "b", "c"}), options=("a", "b", "c", "d", "e"),
              description="Q2(b) proportional output, fast, efficient (not densely packed)"),
     # Q2(b): what the proportional output is good for
-    Exercise(name="q2b_energy_window", notebook=NB, kind="choice", answer="b",
+    Exercise(name="q2_item3", notebook=NB, kind="choice", answer="b",
              options=_ABCD, description="Q2(b) pulse height proportional to energy lets the "
                                         "camera reject scattered photons"),
     # Q2(c): longer holes
-    Exercise(name="q2c_longer_holes", notebook=NB, kind="choice", answer="d",
+    Exercise(name="q2_item4", notebook=NB, kind="choice", answer="d",
              options=_ABCD, description="Q2(c) longer holes: better resolution, fewer photons"),
     # Q2(d): the exam's model against straight-ray geometry
-    Exercise(name="q2d_model_bias", notebook=NB, kind="choice", answer="a",
+    Exercise(name="q2_item5", notebook=NB, kind="choice", answer="a",
              options=_ABCD, description="Q2(d) all-or-nothing overstates the transmission"),
 ]
 
@@ -204,3 +204,22 @@ EXERCISES.append(number_item(
     "q2c_your_length", "q2_nuclear",
     lambda v: float(gamma_camera.collimator_length_for_resolution(v.d, v.R, v.z)),
     "Q2(c) on your numbers: the hole length L (mm) that gives resolution R at z"))
+
+
+def _your_percent(v) -> float:
+    """Q2(d) on the student's numbers: the exam's model through the course's references."""
+    holes = gamma_camera.ring_hole_positions(v.pitch, v.rings)
+    return 100.0 * float(gamma_camera.open_fraction(holes, v.hole_d, v.hole_L, v.source_distance,
+                                                    (v.rings + 1) * v.pitch))
+
+
+# Q2(d) on the student's own numbers, asked before the exam's numbers are worked: the cut-off
+# radius (mm) and the percentage of the photons that reach the back.
+EXERCISES += [
+    number_item("q2d_your_cutoff", NB,
+                lambda v: float(gamma_camera.exam_cutoff_radius(v.hole_d, v.hole_L,
+                                                                v.source_distance)),
+                "Q2(d) on your numbers: the radius out to which the holes are open (mm)"),
+    number_item("q2d_your_percent", NB, _your_percent,
+                "Q2(d) on your numbers: the percentage of the photons that reach the back"),
+]

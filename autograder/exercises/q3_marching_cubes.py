@@ -400,11 +400,11 @@ EXERCISES = [
     Exercise(name="is_closed_consistent", notebook=NB, reference=mesh.is_closed_consistent,
              cases=_closed_cases, compare=same_bool,
              description="Q3(d) the closed and consistently ordered condition"),
-    _choice("q3a_vertex_position", "b", "Q3(a) where on the edge the vertex goes"),
-    _choice("q3b_cases", "c", "Q3(b) how many cases, how many with triangles"),
-    _choice("q3c_ambiguous", "d", "Q3(c) which cases are ambiguous"),
-    _choice("q3c_hole", "a", "Q3(c) what the ambiguity is and what goes wrong"),
-    _choice("q3d_conditions", "c", "Q3(d) conditions for the volume to be meaningful"),
+    _choice("q3_item1", "b", "Q3(a) where on the edge the vertex goes"),
+    _choice("q3_item2", "c", "Q3(b) how many cases, how many with triangles"),
+    _choice("q3_item3", "d", "Q3(c) which cases are ambiguous"),
+    _choice("q3_item4", "a", "Q3(c) what the ambiguity is and what goes wrong"),
+    _choice("q3_item5", "c", "Q3(d) conditions for the volume to be meaningful"),
 ]
 
 

@@ -279,13 +279,13 @@ EXERCISES = [
     Exercise(name="scanline_span", notebook=NB, reference=clipping.scanline_span,
              cases=_span_cases, compare=same_span,
              description="Q6(c): the one span of a triangle on a scanline"),
-    _choice("q6_why_clip", "b",
+    _choice("q6_item1", "b",
             "Q6(a), Item Q6.1: far plane against aliasing, near plane for cut-aways"),
-    _choice("q6_homogeneous_test", "c",
+    _choice("q6_item2", "c",
             "Q6(b)(i), Item Q6.2: camera-independent inequalities; rejects skip the divide"),
-    _choice("q6_which_larger", "b",
+    _choice("q6_item3", "b",
             "Q6(b)(ii), Item Q6.3: A is larger than B in the world; both are edge-on"),
-    _choice("q6_when_decompose", "d",
+    _choice("q6_item4", "d",
             "Q6(c), Item Q6.4: decompose into triangles right after clipping"),
 ]
 

@@ -9,7 +9,9 @@ SVG draws the expected and the received answer on top of each other.
 
 The page is built from the grader's results alone: it never reads a test cell, so the hidden
 tests' code (which plain ``nbgrader generate_feedback`` shows, nbgrader #917 and #1363) cannot
-leak. Choice answers are never revealed.
+leak. Choice keys are never printed; an item's explanation (the instructor's notebook's
+explanation cells, :mod:`autograder.explanations`, which the release leaves out) is shown with
+``--reveal-hidden``, after the due date, whatever the verdict.
 """
 
 from __future__ import annotations
@@ -23,8 +25,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import explanations as explanation_cells
+from ..course import source_notebooks
 from ..model import VERDICT_WORDS, CaseRecord, CellKind, CellResult, Status, Verdict
 from .html import e, e_clipped, page, plot_data, svg_lines, value_text, write_page
+from .safe_markdown import markdown2html
 
 _STYLE = """
 .total{font-size:1.1em;color:#444}.msg{margin:.3em 0 .6em}
@@ -48,14 +53,31 @@ MESSAGE_CHARS = 2_000
 REVEAL_ROWS = 20
 
 
+def course_explanations(notebooks: list[Path] | None = None) -> dict[str, dict[str, list[str]]]:
+    """``{notebook: {item: [markdown, ...]}}`` from the instructor's notebooks (by default the
+    course's ``notebooks/q*.ipynb``); a notebook that cannot be read gives none."""
+    found = {}
+    for path in notebooks if notebooks is not None else source_notebooks():
+        try:
+            found[Path(path).stem] = explanation_cells.of_notebook(Path(path))
+        except (OSError, ValueError) as exc:
+            print(f"warning: no explanations from {Path(path).name}: {exc}", file=sys.stderr)
+    return found
+
+
 def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = False,
-              ids: dict | None = None) -> list[Path]:
+              ids: dict | None = None,
+              explanations: dict[str, dict[str, list[str]]] | None = None) -> list[Path]:
     """Write one page per (student, notebook) that has results; returns the files written.
 
     ``ids``: per (student, notebook), ``{"named": [ids the notebook names besides its
     folder's], "graded_as": the id it was judged on by the instructor's decision, or ""}``
     (:func:`autograder.grade.remedy.ids_of`): the page says so at the top.
+    ``explanations`` (default: :func:`course_explanations`, read only when ``reveal_hidden``)
+    are shown under their items when ``reveal_hidden``.
     """
+    if reveal_hidden and explanations is None:
+        explanations = course_explanations()
     by_key: dict[tuple[str, str], list[CellResult]] = {}
     for r in results:
         by_key.setdefault((r.student, r.notebook), []).append(r)
@@ -65,6 +87,7 @@ def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = Fal
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             write_page(path, render(student, notebook, rows, reveal_hidden,
+                                    (explanations or {}).get(notebook, {}),
                                     whose=(ids or {}).get((student, notebook))))
         except Exception:  # noqa: BLE001 - one bad page never stops the others
             traceback.print_exc()
@@ -76,21 +99,26 @@ def write_all(results: list[CellResult], folder: Path, reveal_hidden: bool = Fal
 
 
 def render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: bool,
+           explanations: dict[str, list[str]] | None = None,
            whose: dict | None = None) -> str:
     """The feedback page of one student's notebook, under :data:`PAGE_CHARS` whatever the
     submission: a page that would be longer is drawn again without the code and output shown
-    back, and with each message cut to :data:`MESSAGE_CHARS`."""
-    text = _render(student, notebook, rows, reveal_hidden, whose=whose)
+    back, and with each message cut to :data:`MESSAGE_CHARS`. With ``reveal_hidden`` each item
+    named in ``explanations`` is followed by its explanation."""
+    shown = explanations if reveal_hidden else None
+    text = _render(student, notebook, rows, reveal_hidden, explanations=shown, whose=whose)
     if len(text) <= PAGE_CHARS:
         return text
     slim = [dataclasses.replace(r, code="", printed="", message=r.message[:MESSAGE_CHARS])
             for r in rows]
-    return _render(student, notebook, slim, reveal_hidden, whose=whose, note=(
-        "This page would have been too long: your code and its printed output are not shown."))
+    return _render(student, notebook, slim, reveal_hidden, note=(
+        "This page would have been too long: your code and its printed output are not shown."),
+        explanations=shown, whose=whose)
 
 
 def _render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: bool,
-            note: str = "", whose: dict | None = None) -> str:
+            note: str = "", explanations: dict[str, list[str]] | None = None,
+            whose: dict | None = None) -> str:
     auto = [r for r in rows if r.kind is not CellKind.MANUAL]
     manual = [r for r in rows if r.kind is CellKind.MANUAL]
     got = sum(r.score or 0.0 for r in auto)
@@ -107,7 +135,7 @@ def _render(student: str, notebook: str, rows: list[CellResult], reveal_hidden: 
     if reveal_hidden:
         body.append("<p class='note'>The failing hidden cases are shown in full (released after "
                     "the deadline).</p>")
-    body += [_cell_html(r, reveal_hidden) for r in rows]
+    body += [_cell_html(r, reveal_hidden) + _explanation_html(r, explanations) for r in rows]
     return page(f"{notebook}: feedback for {student}", body, _STYLE)
 
 
@@ -123,7 +151,8 @@ def _cell_html(r: CellResult, reveal: bool) -> str:
         parts += _hidden_html([c for c in r.cases if not c.visible], reveal)
     elif (r.kind in (CellKind.CHOICE, CellKind.VALUE) and reveal and r.cases
           and r.cases[0].verdict is not Verdict.PASS):
-        parts.append("<p class='note'>See the model answer in the released solutions.</p>")
+        parts.append("<p class='note'>Its explanation follows; see the model answer in the "
+                     "released solutions.</p>")
     return "\n".join(parts + _outputs(r))
 
 
@@ -187,6 +216,15 @@ def with_marks(page_html: str, marks: dict[str, tuple[float, float, bool]]) -> s
                             "Marked by hand: the marker's comment is in the table above.")
 
     return _WRITTEN.sub(head, page_html)
+
+
+def _explanation_html(r: CellResult, explanations: dict[str, list[str]] | None) -> str:
+    """Item ``r``'s explanation (the instructor's markdown, rendered and sanitised)."""
+    if not explanations or not explanations.get(r.name):
+        return ""
+    text = "\n\n".join(explanations[r.name])
+    return ("\n<details class='explanation' open><summary>explanation of this item</summary>"
+            f"{markdown2html({}, text)}</details>")
 
 
 def _visible_html(visible: list[CaseRecord]) -> list[str]:

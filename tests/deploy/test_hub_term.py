@@ -31,7 +31,7 @@ pytestmark = [pytest.mark.xdist_group("hub"), pytest.mark.slow, pytest.mark.brow
 
 A, NB = "tripos2006", "q1_imaging"
 ANA, BEN = STUDENTS
-CHOICE, WRITTEN = "xray_pixel_meaning", "q1a_answer"
+CHOICE, WRITTEN = "q1_item1", "q1a_answer"
 ANA_TEXT = "Ana: a planar X-ray sums the attenuation along each ray from source to film."
 MARK, COMMENT = 4.0, "Ana: the line integral is right; say what CT adds."
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",

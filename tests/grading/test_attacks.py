@@ -761,7 +761,7 @@ def test_a_lookup_table_of_the_hidden_cases_gains_nothing(lookup):
 # the lookup table behind a helper in ANOTHER cell; the sandbox's /job printed at load time
 # (red-team finding 1): the phong cell itself never changes
 
-CHOICE = "colour_aliasing_cause"
+CHOICE = "q5_item3"
 DELEGATE = "def phong(*args, **kwargs):\n    return _rt_impl(*args, **kwargs)\n"
 PRINT_JOB = "print('JOB-DUMP', open('/job').read()[:3000])\n"
 

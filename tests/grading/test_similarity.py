@@ -434,7 +434,7 @@ def test_a_reference_pasted_into_another_cell_is_flagged(tmp_path):
 
     ref = sim.reference_source(REGISTRY["ring_hole_positions"].reference)
     stub = "def ring_hole_positions(pitch, n_rings):\n    return _helper(pitch, n_rings)\n"
-    elsewhere = "q2b_energy_window = 'b'\n\n" + disguise(ref, 7).replace(
+    elsewhere = "q2_item3 = 'b'\n\n" + disguise(ref, 7).replace(
         "def ring_hole_positions", "def _helper")
 
     def row(student, name, code, kind=CellKind.FUNCTION):
@@ -442,7 +442,7 @@ def test_a_reference_pasted_into_another_cell_is_flagged(tmp_path):
                           kind=kind, code=code)
 
     results = [row("erin", "ring_hole_positions", stub),
-               row("erin", "q2b_energy_window", elsewhere, CellKind.CHOICE),
+               row("erin", "q2_item3", elsewhere, CellKind.CHOICE),
                row("frank", "ring_hole_positions", HAND_WRITTEN)]
     found = sim.find_pasted_references({"erin": [stub, elsewhere], "frank": [HAND_WRITTEN]},
                                        {"ring_hole_positions": ref})

@@ -123,8 +123,9 @@ def errors_beyond_stubs(found: list[CellError]) -> list[str]:
 
 
 def option_texts(nb, name: str, student: str = "ci-student") -> dict[str, str]:
-    """``{letter: text}`` of multiple-choice item ``name`` in the canonical order: the list its
-    ``options_<name>`` cell hands to ``mine.options`` (each student sees them shuffled; options
+    """``{letter: text}`` of multiple-choice item ``name`` in the canonical order: the item's
+    options in ``course_lib.item_options``, or the list its ``options_<name>`` cell hands to
+    ``mine.options`` (each student sees them shuffled; options
     written with the student's numbers are filled in with ``student``'s)."""
     import ast
 
@@ -133,6 +134,10 @@ def option_texts(nb, name: str, student: str = "ci-student") -> dict[str, str]:
     if cell is None:
         return {}
     call = ast.parse(cell.source).body[0].value
+    if len(call.args) == 1:          # the item's own options, kept in course_lib.item_options
+        from course_lib.variants import item_texts
+
+        return dict(zip("abcdefgh", item_texts(call.args[0].value)))
     try:
         texts = ast.literal_eval(call.args[1])
     except ValueError:       # options that use the student's numbers (f-strings over ``mine``)

@@ -86,6 +86,22 @@ def test_release_hides_solutions(released, source):
             pytest.fail(f"{gid}: the release carries an output: {str(out)[:200]}")
 
 
+@pytest.mark.parametrize("source", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_release_leaves_out_every_items_explanation(released, source):
+    """An item's explanation reaches the student with the feedback, not in the release: no
+    explanation cell of the source (and none of its paragraphs) is in the student version, and
+    every other markdown cell is."""
+    src, rel = read(source), read(released[source.stem])
+    explained = [c.source for c in src.cells if "explanation" in c.metadata.get("tags", [])]
+    shown = [c.source for c in rel.cells if c.cell_type == "markdown"]
+    for text in explained:
+        first = text.strip().splitlines()[0]
+        assert not any(first in r for r in shown), f"an explanation reached the release: {first}"
+    kept = [c.source for c in src.cells if c.cell_type == "markdown"
+            and "explanation" not in c.metadata.get("tags", []) and not nbgrader_meta(c)]
+    assert all(k in shown for k in kept), "the release lost a markdown cell that is not an explanation"
+
+
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 @pytest.mark.parametrize("source", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])

@@ -147,10 +147,13 @@ def _model_answer_sentences() -> set[str]:
 
 
 def _choice_keys() -> set[str]:
-    """Each multiple-choice item's name (its key sits beside it in the registry)."""
+    """Each multiple-choice item's registry description, which says what its key is (the
+    item's name alone is no needle: ``course_lib.item_options`` ships each item's options,
+    without keys, under its name)."""
     from autograder.exercises import REGISTRY
 
-    return {n for n, ex in REGISTRY.items() if ex.kind == "choice"}
+    return {ex.description for ex in REGISTRY.values()
+            if ex.kind == "choice" and len(ex.description) >= 20}
 
 
 def test_no_file_holds_a_solution_a_model_answer_or_a_key(members):
