@@ -38,7 +38,7 @@ def main() -> None:
             continue
         if r.grade_id == "test_halfway":
             r.score, r.status = r.max_score, Status.OK
-        elif r.name == "specular_exponent_effect":
+        elif r.name == "q5_item1":
             pick = rng.choice("abcd")
             r.answer = variants.displayed_letters(r.name, pick, 4, r.student)
             r.score = r.max_score if pick == "b" else 0.0

@@ -56,15 +56,15 @@ def klass():
         # pure guess: in each block of 4 students by ability, each option once, rotating
         block, pos = divmod(rank[s], 4)
         pick = "abcd"[(pos + block) % 4]
-        results.append(_result(s, "q1_imaging", "test_ct_pixel_meaning", float(pick == "d"),
-                               kind=CellKind.CHOICE, name="ct_pixel_meaning",
-                               answer=_typed("ct_pixel_meaning", pick, s, i)))
+        results.append(_result(s, "q1_imaging", "test_q1_item2", float(pick == "d"),
+                               kind=CellKind.CHOICE, name="q1_item2",
+                               answer=_typed("q1_item2", pick, s, i)))
         # key c for the top 30 %, the distractor b for the next 50 %, a for the rest, d never
         r = rank[s] / N
         pick = "c" if r < 0.3 else ("b" if r < 0.8 else "a")
-        results.append(_result(s, "q1_imaging", "test_xray_pixel_meaning", float(pick == "c"),
-                               kind=CellKind.CHOICE, name="xray_pixel_meaning",
-                               answer=_typed("xray_pixel_meaning", pick, s, i)))
+        results.append(_result(s, "q1_imaging", "test_q1_item1", float(pick == "c"),
+                               kind=CellKind.CHOICE, name="q1_item1",
+                               answer=_typed("q1_item1", pick, s, i)))
     return {"results": results, "theta": dict(zip(ids, theta)), "rank": rank, "ids": ids}
 
 
@@ -112,10 +112,10 @@ def test_the_flags_come_out_as_designed(klass):
     assert strong.flag == "" and strong.discrimination > 0.5
     # top 27 % by rest score are mostly above theta 0.6 (the top 27 % of a normal class)
     assert strong.upper_lower > 0.6
-    guess = stats["test_ct_pixel_meaning"]
+    guess = stats["test_q1_item2"]
     assert guess.facility == pytest.approx(0.25, abs=0.01)
     assert abs(guess.discrimination) < DISCRIMINATION and guess.flag == "review"
-    popular = stats["test_xray_pixel_meaning"]
+    popular = stats["test_q1_item1"]
     assert popular.facility == pytest.approx(0.3, abs=0.005) and popular.flag == ""
     assert sum(s.flag == "review" for s in stats.values() if s.grade_id.startswith("test_f")) \
         <= 2    # the fillers work (a few may be easy)
@@ -134,7 +134,7 @@ def test_the_csv_has_exactly_the_columns_and_no_nan(klass, tmp_path):
     by_id = {r[1]: r for r in rows[1:]}
     assert by_id["test_everyone"][6] == ""          # empty, not nan
     assert by_id["test_strong"][2:5] == ["function", "3", str(N)]
-    assert by_id["test_xray_pixel_meaning"][2] == "choice"
+    assert by_id["test_q1_item1"][2] == "choice"
     assert not any("nan" in cell.lower() for row in rows for cell in row)
 
 
@@ -170,10 +170,10 @@ def test_alpha_per_notebook_and_assignment(klass):
 
 def test_distractor_table_in_canonical_options(klass):
     m = items.score_matrix(items.responses(klass["results"]))
-    j = m.items.index(("q1_imaging", "test_xray_pixel_meaning"))
+    j = m.items.index(("q1_imaging", "test_q1_item1"))
     rest = dict(zip(m.students, m.rest(j)))
     chosen = {r.student: items_html.canonical_choice(r.name, r.answer, r.student)
-              for r in klass["results"] if r.name == "xray_pixel_meaning"}
+              for r in klass["results"] if r.name == "q1_item1"}
     table = {o.option: o for o in item_checks.option_table(chosen, "c", "abcd", rest)}
     top30, next50 = round(0.3 * N), round(0.8 * N) - round(0.3 * N)
     assert [table[x].chosen for x in "abcd"] == [N - top30 - next50, next50, top30, 0]
@@ -191,11 +191,11 @@ def test_distractor_table_in_canonical_options(klass):
 
 
 def test_a_letter_that_is_no_option_is_no_answer():
-    assert items_html.canonical_choice("xray_pixel_meaning", "z", "s001") is None
-    assert items_html.canonical_choice("xray_pixel_meaning", None, "s001") is None
+    assert items_html.canonical_choice("q1_item1", "z", "s001") is None
+    assert items_html.canonical_choice("q1_item1", None, "s001") is None
     assert items_html.canonical_choice("not_a_choice", "a", "s001") is None
-    shown = variants.displayed_letters("pet_ct_reasons", "ac", 4, "ab12")
-    assert items_html.canonical_choice("pet_ct_reasons", ", ".join(shown.upper()),
+    shown = variants.displayed_letters("q1_item5", "ac", 4, "ab12")
+    assert items_html.canonical_choice("q1_item5", ", ".join(shown.upper()),
                                        "ab12") == "ac"
 
 
@@ -251,7 +251,7 @@ def test_a_missing_notebook_is_no_answer_to_its_items(klass):
     oracle = _oracle(answered)
     # the rest score of the fillers still counts the missing notebook as 0 (it is)
     assert stats["test_strong"].n == N - 3 and stats["test_f00"].n == N
-    for gid in ("test_strong", "test_ct_pixel_meaning"):
+    for gid in ("test_strong", "test_q1_item2"):
         n, facility, _, _ = oracle[("q1_imaging", gid)]
         assert stats[gid].facility == pytest.approx(facility, abs=1e-12)
     # a notebook nobody handed in: n = 0, every number empty
@@ -468,8 +468,8 @@ def test_grade_writes_items_csv_and_the_section(tmp_path, sources, monkeypatch):
     monkeypatch.setattr(cli, "probe", probe)
     src = sources[0]
     for student, canonical in (("kim", "c"), ("lee", "a")):
-        shown = variants.displayed_letters("xray_pixel_meaning", canonical, 4, student)
-        nb = set_cell(model_version(src), "xray_pixel_meaning", f'xray_pixel_meaning = "{shown}"')
+        shown = variants.displayed_letters("q1_item1", canonical, 4, student)
+        nb = set_cell(model_version(src), "q1_item1", f'q1_item1 = "{shown}"')
         write_nb(tmp_path / "submitted" / student / "tripos2006" / f"{src.name}.ipynb", nb)
     (tmp_path / "secret").write_bytes(SECRET + b"\n")
     parser = argparse.ArgumentParser()
@@ -486,11 +486,11 @@ def test_grade_writes_items_csv_and_the_section(tmp_path, sources, monkeypatch):
         auto = {(r["notebook"], r["grade_id"]) for r in csv.DictReader(f)
                 if r["student"] == "kim" and (r["notebook"], r["grade_id"]) not in written}
     assert set(got) == auto
-    x = got[(src.name, "test_xray_pixel_meaning")]
+    x = got[(src.name, "test_q1_item1")]
     assert (x["kind"], x["n"], x["facility"]) == ("choice", "2", "0.5000")
     assert got[("q6_clipping", "test_clip_polygon")]["n"] == "0"     # not handed in
     report = (tmp_path / "out" / "report.html").read_text()
-    table = report.split("xray_pixel_meaning (key c; 2 students)")[1].split("</table>")[0]
+    table = report.split("q1_item1 (key c; 2 students)")[1].split("</table>")[0]
     rows = {row.split("</th>")[0].split(">")[-1][:3]: row for row in table.split("<tr>")[2:]}
     assert "✓ key" in rows["(c)"] and "<td class='num'>1</td>" in rows["(c)"]
     assert "<td class='num'>1</td>" in rows["(a)"] and "<td class='num'>0</td>" in rows["(b)"]
