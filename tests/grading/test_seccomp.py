@@ -338,3 +338,92 @@ def test_the_job_carries_the_list_and_the_filter():
     doc = runner._job_document(job, Limits(), True, b"\0" * 16)
     assert doc["modules"] == list(allowlist.ALLOWED_MODULES)
     assert doc["filter"] == "AAAAAAAAAAAAAAAAAAAAAA=="
+
+
+# ------------------------------------------------------------------------------------------
+# the attack of the students' wheel, through the whole grader
+
+
+def _wheel_members(names: tuple[str, ...]) -> dict[str, bytes]:
+    """The compiled ``course_lib`` modules ``names`` from the real students' wheel."""
+    import zipfile
+
+    studentenv = pytest.importorskip("studentenv")
+    with zipfile.ZipFile(studentenv.wheel()) as z:
+        found = {Path(m).name.split(".")[0]: (m, z.read(m)) for m in z.namelist()
+                 if m.startswith("course_lib/") and m.count("/") == 1 and m.endswith(".so")}
+    return {found[n][0].split("/")[1]: found[n][1] for n in names}
+
+
+WHEEL_LOADER = '''
+import base64, os, sys
+os.makedirs("/tmp/zz", exist_ok=True)
+open("/tmp/zz/__init__.py", "w").close()
+for _file, _text in zip(FILES, "".join(CHUNKS).split(",")):
+    with open("/tmp/zz/" + _file, "wb") as _f:
+        _f.write(base64.b85decode(_text))
+sys.path.insert(0, "/tmp")
+import zz, zz._validate
+_cl = "course" + "_lib"            # the compiled module imports its helpers by their real name
+_saved = {k: sys.modules.get(k) for k in (_cl, _cl + "._validate")}
+sys.modules[_cl], sys.modules[_cl + "._validate"] = zz, zz._validate
+try:
+    import zz.shading as _shading
+finally:
+    for _k, _v in _saved.items():
+        if _v is None:
+            sys.modules.pop(_k, None)
+        else:
+            sys.modules[_k] = _v
+
+
+def blinn_phong(colour, Ia, ka, Ip, kd, ks, n, L, N, V):
+    return _shading.blinn_phong(colour, Ia, ka, Ip, kd, ks, n, L, N, V)
+'''
+
+
+def wheel_attack_notebook(src, members: dict[str, bytes]) -> dict:
+    """Q5's release notebook whose ``blinn_phong`` runs the wheel's compiled ``shading``
+    module: the modules as base85 text split across the earlier solution cells (each under the
+    grader's 100 kB cap), written into ``/tmp/zz`` and imported (never as ``course_lib``)."""
+    import base64
+
+    from gradingtools import release_version
+
+    nb = release_version(src)
+    files = list(members)
+    text = ",".join(base64.b85encode(members[f]).decode("ascii") for f in files)
+    carriers = ["normalize", "reflect", "phong", "halfway"]
+    size = -(-len(text) // len(carriers))
+    chunks = [text[k * size:(k + 1) * size] for k in range(len(carriers))]
+    cells = {c["metadata"].get("nbgrader", {}).get("grade_id"): c for c in nb["cells"]}
+    for k, name in enumerate(carriers):
+        cells[name]["source"] = f"_zz{k} = {chunks[k]!r}\n\n" + cells[name]["source"]
+        assert len(cells[name]["source"].encode()) < 100_000
+    cells["blinn_phong"]["source"] = (f"FILES = {files!r}\nCHUNKS = ["
+                                      + ", ".join(f"_zz{k}" for k in range(len(carriers)))
+                                      + "]\n" + WHEEL_LOADER)
+    return nb
+
+
+def test_the_wheels_compiled_module_carried_in_as_text_scores_zero(tmp_path):
+    """Attack 1 of the threat model: without the filter and ``noexec`` this submission's
+    ``blinn_phong`` passes every case (the wheel's own compiled reference answers it)."""
+    from gradingtools import course_sources, read_grades, run_grade, write_nb
+
+    src = next((s for s in course_sources() if s.name == "q5_phong"), None)
+    if src is None:
+        pytest.skip("no q5_phong source notebook")
+    try:
+        probe()
+    except IsolationUnavailable as exc:
+        pytest.skip(str(exc))
+    nb = wheel_attack_notebook(src, _wheel_members(("_validate", "shading")))
+    write_nb(tmp_path / "submitted" / "rt_wheel" / "tripos2006" / f"{src.name}.ipynb", nb,
+             type_answers=False)
+    run_grade(tmp_path / "submitted", tmp_path / "out", "--no-gradebook", "--reveal-hidden")
+    row = read_grades(tmp_path / "out")[("rt_wheel", src.name, "test_blinn_phong")]
+    assert (float(row["score"]), row["status"]) == (0.0, "rejected-code"), row
+    assert "NumPy and the standard library modules listed in the notebook" in row["message"]
+    page = (tmp_path / "out" / "feedback" / "rt_wheel" / f"{src.name}.html").read_text("utf-8")
+    assert "rejected-code" in page and "/tmp/zz/" in page
