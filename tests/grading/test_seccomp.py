@@ -82,11 +82,15 @@ def test_numpy_threads_and_every_allowed_module_still_work(mode):
     out = run(mode, honest)["honest"]
     assert out.load_notes == [] and out.outcomes[0].kind is K.RETURNED, out
     solve, eig, fft, rnd, threads, small = out.outcomes[0].value
-    np.testing.assert_allclose(solve, np.linalg.solve(a, np.ones(3)), rtol=1e-12)
-    np.testing.assert_allclose(eig, np.linalg.eigvalsh(a), rtol=1e-12)
-    np.testing.assert_allclose(fft, np.abs(np.fft.rfft(np.arange(8.0))), atol=1e-12)
+    np.testing.assert_allclose(a @ solve, np.ones(3), rtol=1e-12, atol=1e-12)   # solves it
+    assert np.prod(eig) == pytest.approx(np.linalg.det(a), rel=1e-12)          # det = prod(eig)
+    assert sum(eig) == pytest.approx(np.trace(a), rel=1e-12)
+    k = np.arange(5)   # |DFT of 0..7| at k > 0 is 4 / sin(pi k / 8); at 0 the sum, 28
+    np.testing.assert_allclose(fft, np.r_[28.0, 4 / np.sin(np.pi * k[1:] / 8)], rtol=1e-12,
+                               atol=1e-12)
     np.testing.assert_array_equal(rnd, np.random.default_rng(5).random(3))
-    np.testing.assert_allclose(threads, [np.linalg.det(a) * k for k in (1, 2, 3)], rtol=1e-12)
+    np.testing.assert_allclose(threads, [np.linalg.det(a) * k for k in (1, 2, 3)], rtol=1e-12,
+                               atol=1e-12)
     import math
     import random
     assert small == pytest.approx([math.gamma(4.5), 2.0, 2, 5.0, 0.75, 2, 2, 1.5,
