@@ -242,6 +242,19 @@ def test_writable_mounts_are_noexec_and_proc_read_only(mode):
     assert "ro" in table["/proc"]
 
 
+def test_a_worker_holds_no_writable_and_executable_memory(mode):
+    """Nothing the worker inherits (ctypes' closures included) is both writable and executable,
+    and no executable mapping is anonymous or comes from the writable scratch."""
+    maps = fn("maps", """
+        def maps():
+            rows = [line.split() for line in open("/proc/self/maps")]
+            return [" ".join(r) for r in rows if "x" in r[1] and ("w" in r[1] or len(r) < 6
+                    or r[5].startswith(("/tmp", "/dev")))]
+    """)
+    outcome = run(mode, maps)["maps"].outcomes[0]
+    assert outcome.kind is K.RETURNED and outcome.value == [], outcome
+
+
 # ------------------------------------------------------------------------------------------
 # the filter itself, installed in a plain subprocess (no sandbox needed)
 
