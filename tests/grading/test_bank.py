@@ -450,8 +450,10 @@ ADVERSARIES: dict[str, Adversary] = {
                         _with_target("rejected-output")),
     "adv_subclass": Adversary(_target_code(SUBCLASS, keep_model=False),
                               _with_target("rejected-output")),
+    # (np.testing imports subprocess, socket, lzma...: not among the modules a solution may
+    # use, so the sandbox refuses it before the patches could matter)
     "adv_monkeypatch": Adversary(_target_code(MONKEYPATCH, keep_model=False),
-                                 _with_target("failed")),
+                                 _with_target("rejected-code")),
     "adv_reference": Adversary(_edit(_reference_call), _with_target("reference-used")),
     "adv_reference_import": Adversary(_edit(_reference_from_import),
                                       _with_target("reference-used")),
