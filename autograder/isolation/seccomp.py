@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import errno
 import functools
-import os
 import tempfile
 
 PROT_EXEC = 0x4
@@ -126,12 +125,3 @@ def available() -> bool:
     except (SeccompUnavailable, OSError):
         return False
     return True
-
-
-def kernel_supports() -> bool:
-    """True when this kernel can install seccomp filters (``Seccomp:`` in ``/proc/self/status``)."""
-    try:
-        with open(f"/proc/{os.getpid()}/status", encoding="ascii", errors="replace") as f:
-            return any(line.startswith("Seccomp:") for line in f)
-    except OSError:
-        return False
