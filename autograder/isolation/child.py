@@ -59,6 +59,8 @@ ALLOWED_WHOLE_MODULES = ("course_lib.variants",)
 ALLOWED_COURSE_MODULES = ("course_lib", *ALLOWED_REFERENCE, *ALLOWED_WHOLE_MODULES)
 #: What the grading says of a course_lib import it met (the notebooks' own words).
 OFF_LIMITS = "course_lib, the course's reference library, which graded code may not use"
+#: What a case raises when it needs what a refused import did not define.
+MISSING_AFTER_REFUSAL = (NameError, AttributeError, ImportError)
 #: What the grading says when the sandbox refused compiled code (or a call the seccomp filter
 #: refuses) that a cell tried to load or make.
 REFUSED_CODE = ("graded code may use only NumPy and the standard library modules listed in the "
@@ -510,11 +512,13 @@ def _load_cells(nj: dict, ns: dict, limits: dict, send) -> tuple[str, bool]:
         left = end - time.monotonic()
         note, ref = _run_cell(label, source, ns, left) if left > 0.05 else \
             (f"cell {label} was not run: the cells before it used up the time limit", "")
-        reference = reference or ref
-        refused = refused or ref == REFUSED_CODE
+        if ref == REFUSED_CODE:
+            refused = True
+        else:
+            reference = reference or ref
         if note:
             send({"t": "note", "name": nj["name"], "text": note})
-    return ("" if reference == REFUSED_CODE else reference), refused
+    return reference, refused
 
 
 def _run_cell(label: str, source: str, ns: dict, timeout: float) -> tuple[str, str]:
@@ -580,7 +584,7 @@ def _call_case(nj: dict, ns: dict, case: dict, limits: dict, refused: bool = Fal
         if ref:
             return {"kind": "reference-used",
                     "message": f"used {ref}, from {OFF_LIMITS}"}
-        if refused or refused_code(exc):
+        if refused_code(exc) or (refused and isinstance(exc, MISSING_AFTER_REFUSAL)):
             return {"kind": "rejected-code", "message": f"raised {_exc_name(exc)}: "
                                                         f"{_safe_str(exc, 300)} ({REFUSED_CODE})"}
         return {"kind": "raised", "etype": _exc_name(exc), "mro": _exc_mro(exc),

@@ -186,6 +186,20 @@ def test_attack_is_rejected_code(mode, name):
     assert child.REFUSED_CODE in outcome.message
 
 
+def test_a_refused_import_blames_only_the_cases_that_need_it(mode):
+    """One cell's import is refused; the next cell's function still raises its own ValueError
+    for a bad input (judged as usual), and only the case that needs the module is
+    ``rejected-code``."""
+    mixed = NameJob("mixed", "function", [
+        ("a", "import csv\n"),
+        ("b", "def mixed(x):\n    if x < 0:\n        raise ValueError('negative')\n"
+              "    return csv.excel.delimiter\n")], [CaseInput((-1,), {}), CaseInput((1,), {})])
+    out = run(mode, mixed)["mixed"]
+    assert [o.kind for o in out.outcomes] == [K.RAISED, K.REJECTED_CODE], out
+    assert out.outcomes[0].error_type == "ValueError"
+    assert "NameError" in out.outcomes[1].message
+
+
 def test_unshare_in_a_forked_child_is_refused_too(mode):
     """The filter is inherited: a child process gets exit code 99 (``execve`` refused), not
     ``unshare``'s 0."""
