@@ -220,7 +220,7 @@ def _snoop(nb, src, ctx):
              str(Path(__file__).resolve().parents[2] / "autograder" / "exercises" / "__init__.py"),
              "/etc/shadow", "/etc/passwd", "/root/.config/4f9/secret"]
     body = f"""
-import os, sqlite3
+import os
 for p in {paths!r}:
     try:
         with open(p, "rb") as fh:
@@ -243,7 +243,8 @@ try:
     print("LEAK write gradebook")
 except BaseException as exc:
     print("BLOCKED write", type(exc).__name__)
-try:
+try:                        # (sqlite3 is not among the modules a solution may use)
+    import sqlite3
     con = sqlite3.connect({str(ctx.db)!r})
     con.execute("UPDATE grade SET auto_score = 1000")
     con.commit()
