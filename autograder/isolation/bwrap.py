@@ -5,7 +5,8 @@ read-only filesystem holding only ``/usr``, the base interpreter, NumPy and the 
 ``course_lib`` tables, a private size-limited tmpfs ``/tmp``, its own ``/proc`` (read-only: a
 write to ``/proc/self/mem`` ignores page protections, so it could patch the interpreter's
 code) and a minimal ``/dev``. Every mount the job can write is ``noexec`` (bubblewrap cannot
-mount its tmpfs so, so a first shell inside remounts them before dropping its capabilities).
+mount its tmpfs so, so a first shell inside remounts ``/tmp`` before dropping its capabilities;
+``/`` and ``/dev`` are root's, mode 0755).
 As root, the child then becomes a uid of its own with ``setpriv`` (no groups, no capabilities,
 ``no_new_privs``); without root, bubblewrap needs unprivileged user namespaces. Inside, the
 worker that runs student code adds a seccomp filter (:mod:`.seccomp`; no new executable
@@ -32,9 +33,9 @@ JOB = "/job"                    #: where the job file appears inside
 #: Run first inside the sandbox (as root, before the uid changes): the private network
 #: namespace's loopback goes down too, so the sandbox has no working interface at all.
 LOOPBACK_DOWN = 'if [ -x /usr/bin/ip ]; then /usr/bin/ip link set lo down || exit 125; fi; '
-#: Then every mount the job can write becomes ``noexec`` (bubblewrap makes its tmpfs without).
-NOEXEC = ('/usr/bin/mount -o remount,noexec,nosuid,nodev /tmp || exit 125; '
-          '/usr/bin/mount -o remount,noexec,nosuid,nodev /dev || exit 125; exec "$@"')
+#: Then the one mount the job can write, ``/tmp``, becomes ``noexec`` (bubblewrap makes its
+#: tmpfs without; ``/`` and ``/dev`` are bubblewrap's too, but root's and mode 0755).
+NOEXEC = '/usr/bin/mount -o remount,noexec,nosuid,nodev /tmp || exit 125; exec "$@"'
 INSTALL_HINT = "install it with `apt-get install bubblewrap` (or `make sandbox-deps`)"
 
 #: What an instructor loses with ``--unsafe-no-isolation`` (printed by the caller).

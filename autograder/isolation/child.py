@@ -998,6 +998,9 @@ def main(argv: list) -> None:
     ns = {"__name__": "__main__", "__builtins__": builtins}
     for note in notes + run_setup(job["setup"], ns, float(limits["load_timeout"])):
         write_all(channel, frame({"t": "note", "name": None, "text": note}))
+    import gc
+
+    gc.freeze()   # what the workers inherit is never collected there: no copy-on-write storm
     for nj in job["names"]:
         NameSupervisor(nj, ns, limits, channel, job_deadline, bpf).run()
     write_all(channel, frame({"t": "done"}))
