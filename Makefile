@@ -48,13 +48,20 @@ mathjax-deps:
 	  else echo "warning: not root, cannot apt-get install libjs-mathjax; the Formgrader will load MathJax from its CDN"; fi; \
 	fi
 
-## sandbox-deps: Debian's bubblewrap, the grading sandbox (autograder/isolation)
+## sandbox-deps: Debian's bubblewrap, the grading sandbox, and libseccomp2, its seccomp filter
+## (autograder/isolation)
 sandbox-deps:
 	@if [ ! -x /usr/bin/bwrap ]; then \
 	  if [ "$$(id -u)" = 0 ]; then \
 	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends bubblewrap >/dev/null 2>&1) \
 	      || echo "warning: could not install bubblewrap; the grader cannot isolate students' code"; \
 	  else echo "warning: not root, cannot apt-get install bubblewrap; the grader cannot isolate students' code"; fi; \
+	fi
+	@if ! /sbin/ldconfig -p 2>/dev/null | grep -q 'libseccomp\.so\.2'; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libseccomp2 >/dev/null 2>&1) \
+	      || echo "warning: could not install libseccomp2; the grader cannot filter students' system calls"; \
+	  else echo "warning: not root, cannot apt-get install libseccomp2; the grader cannot filter students' system calls"; fi; \
 	fi
 
 ## postgres-deps: Debian's PostgreSQL server binaries, for the tests of the gradebook on PostgreSQL

@@ -23,9 +23,9 @@ import time
 import numpy as np
 
 from .exercises.base import Exercise, Mismatch, NotPlainData, same_choice, to_plain
-from .model import (SEVERITY, VERDICT_STATUS, VERDICT_WORDS, AnswerHint, AnswerShape,
-                    CaseOutcome, CaseRecord, CellKind, OutcomeKind, Status, ValueSummary,
-                    Verdict)
+from .model import (SEVERITY, STATUS_MEANING, VERDICT_STATUS, VERDICT_WORDS, AnswerHint,
+                    AnswerShape, CaseOutcome, CaseRecord, CellKind, OutcomeKind, Status,
+                    ValueSummary, Verdict)
 
 #: The MRO entry of the exception the released stubs raise (``raise NotImplementedError()``).
 NOT_IMPLEMENTED = "builtins.NotImplementedError"
@@ -75,6 +75,8 @@ def judge_case(ex: Exercise, case, expected, outcome: CaseOutcome) -> tuple[Verd
         return Verdict.REJECTED, outcome.message or "returned something that is not plain numbers"
     if kind is OutcomeKind.REFERENCE_USED:
         return Verdict.REFERENCE_USED, outcome.message or "used course_lib, the reference library"
+    if kind is OutcomeKind.REJECTED_CODE:
+        return Verdict.REJECTED_CODE, outcome.message or STATUS_MEANING[Status.REJECTED_CODE]
     return Verdict.NOT_RUN, outcome.message or "not run"
 
 

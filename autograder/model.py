@@ -37,6 +37,7 @@ class OutcomeKind(str, enum.Enum):
     CRASHED = "crashed"                 #: the process died (signal, memory limit, os._exit)
     REJECTED = "rejected"               #: returned something that is not plain data, or too big
     REFERENCE_USED = "reference-used"   #: imported or called a course reference (absent)
+    REJECTED_CODE = "rejected-code"     #: failed because the sandbox refused compiled code
     NOT_RUN = "not-run"                 #: never reached (the job's time ran out, too many crashes)
 
 
@@ -51,6 +52,7 @@ class Verdict(str, enum.Enum):
     TIMEOUT = "timeout"
     REJECTED = "rejected"
     REFERENCE_USED = "reference-used"
+    REJECTED_CODE = "rejected-code"     #: failed because the sandbox refused compiled code
     NOT_RUN = "not-run"                 #: never run (the time was used up; see its reason)
 
 
@@ -64,6 +66,7 @@ class Status(str, enum.Enum):
     TIMEOUT = "timeout"
     REJECTED_OUTPUT = "rejected-output"
     REFERENCE_USED = "reference-used"
+    REJECTED_CODE = "rejected-code"
     MISSING = "missing"
     UNREADABLE = "unreadable"
     MANUAL = "manual"
@@ -85,6 +88,10 @@ STATUS_MEANING = {
                             "object of its own class, an array subclass, a result too large)",
     Status.REFERENCE_USED: "the code imported or called course_lib, the course's reference "
                            "library, which graded code may not use (score 0)",
+    Status.REJECTED_CODE: "graded code may use only NumPy and the standard library modules "
+                          "listed in the notebook: the code tried to load compiled code or make "
+                          "a system call that the grading sandbox refuses (the cases it broke "
+                          "score 0)",
     Status.MISSING: "the notebook was not submitted (or was renamed), or its solution cell is "
                     "gone",
     Status.UNREADABLE: "the notebook file could not be read: invalid JSON, an old notebook "
@@ -96,7 +103,7 @@ STATUS_MEANING = {
 }
 
 #: When a test cell fails in several ways, its status names the most serious one.
-SEVERITY = (Status.REFERENCE_USED, Status.REJECTED_OUTPUT, Status.TIMEOUT, Status.ERROR,
+SEVERITY = (Status.REFERENCE_USED, Status.REJECTED_CODE, Status.REJECTED_OUTPUT, Status.TIMEOUT, Status.ERROR,
             Status.FAILED, Status.UNANSWERED)
 
 #: The cell status a failing verdict maps to.
@@ -105,6 +112,7 @@ VERDICT_STATUS = {
     Verdict.UNANSWERED: Status.UNANSWERED, Verdict.ERROR: Status.ERROR,
     Verdict.TIMEOUT: Status.TIMEOUT, Verdict.REJECTED: Status.REJECTED_OUTPUT,
     Verdict.REFERENCE_USED: Status.REFERENCE_USED, Verdict.NOT_RUN: Status.ERROR,
+    Verdict.REJECTED_CODE: Status.REJECTED_CODE,
 }
 
 #: How a failing verdict reads in a summary ("3 wrong value, 1 timed out").
@@ -114,6 +122,7 @@ VERDICT_WORDS = {
     Verdict.UNANSWERED: "no answer", Verdict.ERROR: "raised an error",
     Verdict.TIMEOUT: "timed out", Verdict.REJECTED: "returned something that is not plain numbers",
     Verdict.REFERENCE_USED: "used the reference", Verdict.NOT_RUN: "not run",
+    Verdict.REJECTED_CODE: "refused by the sandbox (compiled code)",
 }
 
 

@@ -298,7 +298,7 @@ def judge_name(work: NotebookWork, name: str, test_id: str, points: float,
         score, status, message = 0.0, Status.FAILED, judging.not_typed(name, kind)
     if hint.reference and kind is CellKind.FUNCTION:
         score, status, message = 0.0, *judging.reference_imported(name, hint.reference)
-    elif score == 0 and status is not Status.REFERENCE_USED:
+    elif score == 0 and status not in (Status.REFERENCE_USED, Status.REJECTED_CODE):
         why = "; ".join(judging.clip(n, 200) for n in load_notes[-3:])
         override = judging.unanswered_or_broken(name, kind, hint, run.defined, why)
         if override is not None:

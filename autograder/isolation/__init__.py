@@ -5,8 +5,9 @@ anything but its own inputs.
     runs = run_notebook(job, Limits(), probe())      # {name: autograder.model.NameRun}
 
 See :mod:`.runner` (the grader's side), :mod:`.child` (the program inside the sandbox, and the
-wire format), :mod:`.bwrap` (the sandbox itself), :mod:`.identity` (a uid per job) and
-:mod:`.cgroup` (the whole job's memory and process limits).
+wire format), :mod:`.bwrap` (the sandbox itself), :mod:`.seccomp` (the system calls a worker may
+not make), :mod:`.allowlist` (the modules a solution may use), :mod:`.identity` (a uid per job)
+and :mod:`.cgroup` (the whole job's memory and process limits).
 """
 
 from .bwrap import UNSAFE_WARNING, IsolationError, IsolationUnavailable, Mode, probe

@@ -2,9 +2,15 @@
 
 The sandbox is bubblewrap (``bwrap``): its own mount, PID, network, IPC and UTS namespaces, a
 read-only filesystem holding only ``/usr``, the base interpreter, NumPy and the allow-listed
-``course_lib`` tables, a private size-limited tmpfs ``/tmp``, its own ``/proc`` and a minimal
-``/dev``. As root, the child then becomes a uid of its own with ``setpriv`` (no groups, no
-capabilities, ``no_new_privs``); without root, bubblewrap needs unprivileged user namespaces.
+``course_lib`` tables, a private size-limited tmpfs ``/tmp``, its own ``/proc`` (read-only: a
+write to ``/proc/self/mem`` ignores page protections, so it could patch the interpreter's
+code) and a minimal ``/dev``. Every mount the job can write is ``noexec`` (bubblewrap cannot
+mount its tmpfs so, so a first shell inside remounts ``/tmp`` before dropping its capabilities;
+``/`` and ``/dev`` are root's, mode 0755).
+As root, the child then becomes a uid of its own with ``setpriv`` (no groups, no capabilities,
+``no_new_privs``); without root, bubblewrap needs unprivileged user namespaces. Inside, the
+worker that runs student code adds a seccomp filter (:mod:`.seccomp`; no new executable
+memory, no ``execve``, no new namespaces: user namespaces are off).
 """
 
 from __future__ import annotations
@@ -17,6 +23,8 @@ import subprocess
 import sys
 import sysconfig
 
+from . import seccomp
+
 BWRAP = "/usr/bin/bwrap"
 SETPRIV = "/usr/bin/setpriv"
 SITE = "/sandbox/site"          #: where NumPy and the allow-listed tables appear inside
@@ -24,7 +32,10 @@ CHILD = "/sandbox/child.py"     #: where the child program appears inside
 JOB = "/job"                    #: where the job file appears inside
 #: Run first inside the sandbox (as root, before the uid changes): the private network
 #: namespace's loopback goes down too, so the sandbox has no working interface at all.
-LOOPBACK_DOWN = 'if [ -x /usr/bin/ip ]; then /usr/bin/ip link set lo down || exit 125; fi; exec "$@"'
+LOOPBACK_DOWN = 'if [ -x /usr/bin/ip ]; then /usr/bin/ip link set lo down || exit 125; fi; '
+#: Then the one mount the job can write, ``/tmp``, becomes ``noexec`` (bubblewrap makes its
+#: tmpfs without; ``/`` and ``/dev`` are bubblewrap's too, but root's and mode 0755).
+NOEXEC = '/usr/bin/mount -o remount,noexec,nosuid,nodev /tmp || exit 125; exec "$@"'
 INSTALL_HINT = "install it with `apt-get install bubblewrap` (or `make sandbox-deps`)"
 
 #: What an instructor loses with ``--unsafe-no-isolation`` (printed by the caller).
@@ -65,6 +76,9 @@ def probe() -> Mode:
     if privileged() and not os.access(SETPRIV, os.X_OK):
         raise IsolationUnavailable(f"{SETPRIV} is missing: install it with "
                                    "`apt-get install util-linux`")
+    if not seccomp.available():
+        raise IsolationUnavailable("the seccomp filter cannot be built: install libseccomp2 "
+                                   "(`make sandbox-deps`) and the Python package pyseccomp")
     argv = [BWRAP, *namespace_args(), "--ro-bind", "/usr", "/usr", *system_links(),
             "--", "/usr/bin/true"]
     try:
@@ -146,12 +160,13 @@ def bwrap_command(job_file: str, allowlist_dir: str, child_file: str, channel_fd
         argv += ["--ro-bind", path, f"{SITE}/{os.path.basename(path)}"]
     argv += ["--ro-bind", os.path.join(allowlist_dir, "course_lib"), f"{SITE}/course_lib",
              "--ro-bind", job_file, JOB, "--ro-bind", child_file, CHILD,
-             "--proc", "/proc", "--dev", "/dev",
+             "--proc", "/proc", "--remount-ro", "/proc", "--dev", "/dev",
              "--size", str(int(scratch_mb) * 2**20), "--perms", "1777", "--tmpfs", "/tmp", "--chdir", "/tmp"]
-    if uid is not None:   # as root: loopback down, then a uid of its own and no capability
+    if uid is not None:   # as root: loopback down, noexec, then a uid of its own, no capability
         argv += ["--cap-drop", "ALL", "--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID",
-                 "--cap-add", "CAP_SETPCAP", "--cap-add", "CAP_NET_ADMIN", "--as-pid-1", "--",
-                 "/bin/sh", "-c", LOOPBACK_DOWN, "sh",
+                 "--cap-add", "CAP_SETPCAP", "--cap-add", "CAP_NET_ADMIN",
+                 "--cap-add", "CAP_SYS_ADMIN", "--as-pid-1", "--",
+                 "/bin/sh", "-c", LOOPBACK_DOWN + NOEXEC, "sh",
                  SETPRIV, f"--reuid={uid}", f"--regid={uid}", "--clear-groups",
                  "--inh-caps=-all", "--bounding-set=-all", "--no-new-privs"]
     else:

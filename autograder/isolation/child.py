@@ -59,6 +59,12 @@ ALLOWED_WHOLE_MODULES = ("course_lib.variants",)
 ALLOWED_COURSE_MODULES = ("course_lib", *ALLOWED_REFERENCE, *ALLOWED_WHOLE_MODULES)
 #: What the grading says of a course_lib import it met (the notebooks' own words).
 OFF_LIMITS = "course_lib, the course's reference library, which graded code may not use"
+#: What a case raises when it needs what a refused import did not define.
+MISSING_AFTER_REFUSAL = (NameError, AttributeError, ImportError)
+#: What the grading says when the sandbox refused compiled code (or a call the seccomp filter
+#: refuses) that a cell tried to load or make.
+REFUSED_CODE = ("graded code may use only NumPy and the standard library modules listed in the "
+                "notebook: the sandbox runs no compiled code that a notebook brings")
 
 
 # ============================================================================================
@@ -296,6 +302,82 @@ def _libc_prctl(option: int, arg: int) -> None:
         pass
 
 
+_KEPT: list = []      #: libraries loaded for good before the filter
+PR_GET_SECCOMP = 21
+PR_SET_SECCOMP = 22
+SECCOMP_MODE_FILTER = 2
+PR_SET_NO_NEW_PRIVS = 38
+
+
+def _install_filter(bpf: bytes) -> None:
+    """Install the seccomp filter ``bpf`` (classic BPF from the grader, see
+    ``autograder.isolation.seccomp``) on this process, for good; ``OSError`` if the kernel
+    refuses. ``no_new_privs`` first: the kernel demands it of a process without privileges."""
+    import ctypes
+
+    class SockFprog(ctypes.Structure):
+        _fields_ = [("len", ctypes.c_ushort), ("filter", ctypes.c_void_p)]
+
+    libc = ctypes.CDLL(None, use_errno=True)
+    code = ctypes.create_string_buffer(bpf, len(bpf))
+    prog = SockFprog(len(bpf) // 8, ctypes.addressof(code))
+    if libc.prctl(PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0 or \
+            libc.prctl(PR_SET_SECCOMP, SECCOMP_MODE_FILTER, ctypes.byref(prog), 0, 0) != 0:
+        err = ctypes.get_errno()
+        raise OSError(err, f"the seccomp filter could not be installed ({os.strerror(err)})")
+
+
+def _seccomp_supported() -> bool:
+    """True when this kernel can install seccomp filters (``PR_GET_SECCOMP`` answers)."""
+    import ctypes
+
+    try:
+        return ctypes.CDLL(None, use_errno=True).prctl(PR_GET_SECCOMP, 0, 0, 0, 0) >= 0
+    except (OSError, AttributeError):
+        return False
+
+
+def _preload(modules: list) -> list:
+    """Import the modules a solution may use (the grader's allow-list) while compiled code can
+    still be loaded, and ``libgcc_s`` (glibc loads it when a thread ends); what failed, as
+    notes."""
+    import ctypes
+    import importlib
+
+    notes = []
+    try:
+        _KEPT.append(ctypes.CDLL("libgcc_s.so.1"))   # kept loaded: glibc finds it there later
+    except OSError:
+        notes.append("the sandbox could not load libgcc_s.so.1: threads may fail")
+    for name in modules:
+        try:
+            importlib.import_module(name)
+        except ImportError as exc:
+            notes.append(f"the sandbox could not load the allowed module {name} ({exc})")
+    return notes
+
+
+def refused_code(exc: BaseException) -> bool:
+    """Whether ``exc`` (or an exception it was raised from or during) is the sandbox refusing
+    compiled code or a call: an extension module that could not be loaded, ``dlopen``'s
+    "failed to map segment", or ``EPERM`` from a system call. Never raises."""
+    try:
+        for _ in range(6):
+            if exc is None:
+                return False
+            if isinstance(exc, ImportError) and not isinstance(exc, ModuleNotFoundError):
+                path = exc.path if type(exc.path) is str else ""
+                if path.endswith(".so") or "failed to map segment" in _safe_str(exc, 2000):
+                    return True
+            if isinstance(exc, OSError) and (exc.errno == 1 or "failed to map segment"
+                                             in _safe_str(exc, 2000)):
+                return True
+            exc = exc.__cause__ or exc.__context__
+    except BaseException:  # noqa: BLE001 - a student's exception may raise anything
+        pass
+    return False
+
+
 def _set_rlimits(limits: dict, budget_seconds: float) -> None:
     import resource
 
@@ -419,25 +501,29 @@ class Capture:
         return True
 
 
-def _load_cells(nj: dict, ns: dict, limits: dict, send) -> str:
+def _load_cells(nj: dict, ns: dict, limits: dict, send) -> tuple[str, bool]:
     """Execute the name's cells in order, all of them within ONE load time limit, each failure
-    a note. Returns what of ``course_lib`` a failing cell tried to use (``""`` if none)."""
-    reference = ""
+    a note. Returns what of ``course_lib`` a failing cell tried to use (``""`` if none), and
+    whether the sandbox refused a cell's compiled code (:func:`refused_code`)."""
+    reference, refused = "", False
     end = time.monotonic() + float(limits["load_timeout"])   # ONE budget for all the cells
     for label, source in nj["cells"]:
         send({"t": "cell", "name": nj["name"], "label": label})
         left = end - time.monotonic()
         note, ref = _run_cell(label, source, ns, left) if left > 0.05 else \
             (f"cell {label} was not run: the cells before it used up the time limit", "")
-        reference = reference or ref
+        if ref == REFUSED_CODE:
+            refused = True
+        else:
+            reference = reference or ref
         if note:
             send({"t": "note", "name": nj["name"], "text": note})
-    return reference
+    return reference, refused
 
 
 def _run_cell(label: str, source: str, ns: dict, timeout: float) -> tuple[str, str]:
     """``(note, reference)`` of one cell: why it failed (``""`` if it did not), and what of
-    ``course_lib`` it tried to use."""
+    ``course_lib`` it tried to use (:data:`REFUSED_CODE` when the sandbox refused its code)."""
     try:
         code = compile(source, f"<cell {label}>", "exec")
         try:
@@ -455,6 +541,9 @@ def _run_cell(label: str, source: str, ns: dict, timeout: float) -> tuple[str, s
         note = f"cell {label} raised {_exc_name(exc)}: {_safe_str(exc, 300)}"
         if ref:
             note += f" ({ref} is from {OFF_LIMITS})"
+        elif refused_code(exc):
+            ref = REFUSED_CODE
+            note += f" ({REFUSED_CODE})"
         return note, ref
     return "", ""
 
@@ -474,8 +563,9 @@ def _exc_mro(exc: BaseException) -> list:
         return []
 
 
-def _call_case(nj: dict, ns: dict, case: dict, limits: dict) -> dict:
-    """Run one case; the record's ``kind`` and its value or error."""
+def _call_case(nj: dict, ns: dict, case: dict, limits: dict, refused: bool = False) -> dict:
+    """Run one case; the record's ``kind`` and its value or error (``rejected-code`` when it
+    failed because the sandbox refused compiled code, in this case or in the cells before)."""
     timeout = float(limits["case_timeout"])
     try:
         try:
@@ -494,6 +584,9 @@ def _call_case(nj: dict, ns: dict, case: dict, limits: dict) -> dict:
         if ref:
             return {"kind": "reference-used",
                     "message": f"used {ref}, from {OFF_LIMITS}"}
+        if refused_code(exc) or (refused and isinstance(exc, MISSING_AFTER_REFUSAL)):
+            return {"kind": "rejected-code", "message": f"raised {_exc_name(exc)}: "
+                                                        f"{_safe_str(exc, 300)} ({REFUSED_CODE})"}
         return {"kind": "raised", "etype": _exc_name(exc), "mro": _exc_mro(exc),
                 "message": _safe_str(exc, 500)}
     return _encode_result(value, int(case["cap"]))
@@ -511,16 +604,21 @@ def _encode_result(value, cap: int) -> dict:
                                                f"({_exc_name(exc)})"}
 
 
-def _case_record(nj: dict, i: int, ns: dict, limits: dict, reference: str, capture) -> bytes:
+def _case_record(nj: dict, i: int, ns: dict, limits: dict, loaded: tuple[str, bool],
+                 capture) -> bytes:
     case = nj["cases"][i]
+    reference, refused = loaded
     capture.take()
     t0 = time.monotonic()
     if nj["name"] in ns:
-        rec = _call_case(nj, ns, case, limits)
+        rec = _call_case(nj, ns, case, limits, refused)
     elif reference:
         rec = {"kind": "reference-used",
                "message": f"{nj['name']!r} is not defined: its cell used {reference}, "
                           f"from {OFF_LIMITS}"}
+    elif refused:
+        rec = {"kind": "rejected-code",
+               "message": f"{nj['name']!r} is not defined: {REFUSED_CODE}"}
     else:
         rec = {"kind": "not-run", "message": f"{nj['name']!r} is not defined after its cells"}
     rec.update(t="case", name=nj["name"], i=i, seconds=time.monotonic() - t0,
@@ -537,9 +635,10 @@ def _case_record(nj: dict, i: int, ns: dict, limits: dict, reference: str, captu
     return data
 
 
-def _worker_setup(limits: dict) -> Capture:
+def _worker_setup(limits: dict, bpf: bytes = b"") -> Capture:
     """Make this forked process a worker: own session, no descriptors of the supervisor, its
-    memory limit, first in line for the OOM killer, prints captured."""
+    memory limit, first in line for the OOM killer, prints captured, and last, before any
+    student text runs, the seccomp filter ``bpf`` (when the job has one)."""
     import resource
 
     os.setsid()
@@ -561,24 +660,27 @@ def _worker_setup(limits: dict) -> Capture:
     signal.signal(signal.SIGINT, signal.default_int_handler)
     capture = Capture(int(limits["output_bytes"]))
     sys.stdout = sys.stderr = capture
+    if bpf:
+        _install_filter(bpf)
     return capture
 
 
-def worker_main(nj: dict, ns: dict, start: int, limits: dict, out_fd: int) -> None:
+def worker_main(nj: dict, ns: dict, start: int, limits: dict, out_fd: int,
+                bpf: bytes = b"") -> None:
     """The worker's whole life: cells, then cases ``start...``, each streamed; never returns."""
     code = 0
     try:
-        capture = _worker_setup(limits)
+        capture = _worker_setup(limits, bpf)
 
         def send(rec):
             write_all(out_fd, frame(rec))
 
-        reference = _load_cells(nj, ns, limits, send)
+        loaded = _load_cells(nj, ns, limits, send)
         send({"t": "loaded", "name": nj["name"], "defined": nj["name"] in ns,
               "printed": capture.take()})
         for i in range(start, len(nj["cases"])):
             send({"t": "start", "name": nj["name"], "i": i})
-            write_all(out_fd, _case_record(nj, i, ns, limits, reference, capture))
+            write_all(out_fd, _case_record(nj, i, ns, limits, loaded, capture))
         send({"t": "done", "name": nj["name"]})
     except BaseException:  # noqa: BLE001 - e.g. the pipe closed: the supervisor decides
         code = 70
@@ -633,8 +735,9 @@ class NameSupervisor:
     dead or hung worker could not report."""
 
     def __init__(self, nj: dict, ns: dict, limits: dict, channel: int,
-                 job_deadline: float = float("inf")):
+                 job_deadline: float = float("inf"), bpf: bytes = b""):
         self.nj, self.ns, self.limits, self.channel = nj, ns, limits, channel
+        self.bpf = bpf             #: the seccomp filter every worker installs
         self.n = len(nj["cases"])
         #: the hard end of this name: its own budget, never beyond the notebook's
         self.hard = min(job_deadline, time.monotonic() + name_budget(limits, self.n))
@@ -693,7 +796,7 @@ class NameSupervisor:
             try:
                 os.close(rfd)
                 os.close(self.channel)
-                worker_main(self.nj, self.ns, self.next, self.limits, wfd)
+                worker_main(self.nj, self.ns, self.next, self.limits, wfd, self.bpf)
             finally:
                 os._exit(70)
         os.close(wfd)
@@ -887,12 +990,19 @@ def main(argv: list) -> None:
 
     import numpy  # noqa: F401 - imported once here, inherited by every worker
 
+    bpf = base64.b64decode(job.get("filter") or "")
+    if bpf and not _seccomp_supported():   # before any record: the grader's problem
+        raise SystemExit("child.py: this kernel cannot install seccomp filters")
+    notes = _preload(list(job.get("modules") or ()))
     sys.stdout = sys.stderr = Capture(int(limits["output_bytes"]))
     ns = {"__name__": "__main__", "__builtins__": builtins}
-    for note in run_setup(job["setup"], ns, float(limits["load_timeout"])):
+    for note in notes + run_setup(job["setup"], ns, float(limits["load_timeout"])):
         write_all(channel, frame({"t": "note", "name": None, "text": note}))
+    import gc
+
+    gc.freeze()   # what the workers inherit is never collected there: no copy-on-write storm
     for nj in job["names"]:
-        NameSupervisor(nj, ns, limits, channel, job_deadline).run()
+        NameSupervisor(nj, ns, limits, channel, job_deadline, bpf).run()
     write_all(channel, frame({"t": "done"}))
     os._exit(0)
 

@@ -10,6 +10,7 @@ left when this returns.
 
 from __future__ import annotations
 
+import base64
 import json
 import math
 import os
@@ -20,7 +21,7 @@ import time
 
 from autograder.model import CaseOutcome, NameRun, OutcomeKind
 
-from . import allowlist, bwrap, child
+from . import allowlist, bwrap, child, seccomp
 from .cgroup import JobCgroup
 from .identity import allocate_uid
 from .jobs import Limits, NotebookJob, validate_job
@@ -166,8 +167,9 @@ class Collector:
         return {name: s.result(ending, self.setup_notes) for name, s in self.names.items()}
 
 
-def _job_document(job: NotebookJob, limits: Limits, privileged: bool) -> dict:
-    """The job as the child reads it: limits, setup, names, cases (inputs in wire format)."""
+def _job_document(job: NotebookJob, limits: Limits, privileged: bool, bpf: bytes = b"") -> dict:
+    """The job as the child reads it: limits, setup, names, cases (inputs in wire format), the
+    modules to load before any student text runs, and the seccomp filter to install then."""
     names = []
     for k, nj in enumerate(job.names):
         cases = []
@@ -184,13 +186,23 @@ def _job_document(job: NotebookJob, limits: Limits, privileged: bool) -> dict:
                       "cases": cases})
     lim = {k: getattr(limits, k) for k in Limits.__dataclass_fields__}
     lim.update(nproc=privileged, budget_seconds=math.ceil(job_budget(job, limits)))
-    return {"limits": lim, "setup": job.setup_source, "names": names}
+    return {"limits": lim, "setup": job.setup_source, "names": names,
+            "modules": list(allowlist.ALLOWED_MODULES),
+            "filter": base64.b64encode(bpf).decode("ascii")}
 
 
-def _write_job_files(job: NotebookJob, limits: Limits, workdir: str, privileged: bool) -> str:
+def _filter(mode: bwrap.Mode) -> bytes:
+    """The seccomp filter: required in the sandbox (the probe checked), best effort without."""
+    if mode is bwrap.Mode.ISOLATED or seccomp.available():
+        return seccomp.filter_bytes()
+    return b""
+
+
+def _write_job_files(job: NotebookJob, limits: Limits, workdir: str, privileged: bool,
+                     mode: bwrap.Mode) -> str:
     path = os.path.join(workdir, "job.json")
     with open(path, "w", encoding="utf-8") as f:
-        json.dump(_job_document(job, limits, privileged), f)
+        json.dump(_job_document(job, limits, privileged, _filter(mode)), f)
     os.chmod(path, 0o644)
     allowlist.write_package(os.path.join(workdir, "site"))
     return path
@@ -277,7 +289,7 @@ def run_notebook(job: NotebookJob, limits: Limits = DEFAULT_LIMITS,
     workdir = tempfile.mkdtemp(prefix="autograder-isolation-")
     lease = cgroup = None
     try:
-        job_file = _write_job_files(job, limits, workdir, root)
+        job_file = _write_job_files(job, limits, workdir, root, mode)
         lease = allocate_uid() if root else None
         cgroup = JobCgroup(f"u{lease.uid}", limits.memory_mb, limits.pids) if root else None
         rfd, wfd = os.pipe()

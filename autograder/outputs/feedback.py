@@ -36,7 +36,7 @@ _STYLE = """
 .badge{display:inline-block;padding:.05em .5em;border-radius:.8em;font-size:.85em;color:#fff}
 .ok{background:#2e7d32}.failed{background:#c62828}.error{background:#8e24aa}
 .timeout{background:#ef6c00}.missing,.unreadable,.unanswered{background:#616161}
-.reference-used,.rejected-output{background:#b71c1c}.manual{background:#1565c0}
+.reference-used,.rejected-output,.rejected-code{background:#b71c1c}.manual{background:#1565c0}
 .grader-error{background:#000}.pass{color:#2e7d32}.fail{color:#c62828}
 .whose{border-left:4px solid #ef6c00;padding:.3em .8em;background:#fff3e0}
 details{margin:.4em 0}svg{background:#fafafa;border:1px solid #ddd}.legend span{margin-right:1.2em}

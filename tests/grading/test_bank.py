@@ -220,7 +220,7 @@ def _snoop(nb, src, ctx):
              str(Path(__file__).resolve().parents[2] / "autograder" / "exercises" / "__init__.py"),
              "/etc/shadow", "/etc/passwd", "/root/.config/4f9/secret"]
     body = f"""
-import os, sqlite3
+import os
 for p in {paths!r}:
     try:
         with open(p, "rb") as fh:
@@ -243,7 +243,8 @@ try:
     print("LEAK write gradebook")
 except BaseException as exc:
     print("BLOCKED write", type(exc).__name__)
-try:
+try:                        # (sqlite3 is not among the modules a solution may use)
+    import sqlite3
     con = sqlite3.connect({str(ctx.db)!r})
     con.execute("UPDATE grade SET auto_score = 1000")
     con.commit()
@@ -450,8 +451,10 @@ ADVERSARIES: dict[str, Adversary] = {
                         _with_target("rejected-output")),
     "adv_subclass": Adversary(_target_code(SUBCLASS, keep_model=False),
                               _with_target("rejected-output")),
+    # (np.testing imports subprocess, socket, lzma...: not among the modules a solution may
+    # use, so the sandbox refuses it before the patches could matter)
     "adv_monkeypatch": Adversary(_target_code(MONKEYPATCH, keep_model=False),
-                                 _with_target("failed")),
+                                 _with_target("rejected-code")),
     "adv_reference": Adversary(_edit(_reference_call), _with_target("reference-used")),
     "adv_reference_import": Adversary(_edit(_reference_from_import),
                                       _with_target("reference-used")),
