@@ -159,11 +159,58 @@ function paintScene(ctx, scene, scratch, hatches) {
   }
 }
 
+// Accessibility of the explorer around the canvas: ipywidgets 8 gives a slider's handle (a
+// noUiSlider <div role="slider">) no accessible name, and an HTML readout no live region. The
+// controls are ipywidgets' own views, so the names are set here, on the explorer's outermost
+// widget box, and again whenever its views re-render (a MutationObserver).
+function nameControls(root) {
+  for (const slider of root.querySelectorAll(".widget-slider")) {
+    const label = slider.querySelector(".widget-label");
+    const name = ((slider.getAttribute("title") || "") || (label ? label.textContent : "")).trim();
+    if (!name) continue;
+    for (const handle of slider.querySelectorAll(".noUi-handle, [role=slider]"))
+      if (handle.getAttribute("aria-label") !== name) handle.setAttribute("aria-label", name);
+    const readout = slider.querySelector(".widget-readout");
+    if (readout && readout.getAttribute("aria-label") !== `${name}, value`)
+      readout.setAttribute("aria-label", `${name}, value`);
+  }
+  for (const live of root.querySelectorAll(".course-live"))
+    if (live.getAttribute("aria-live") !== "polite") {
+      live.setAttribute("aria-live", "polite"); live.setAttribute("role", "status");
+    }
+}
+
+function explorerRoot(el) {
+  let root = el.parentElement || el;
+  for (let p = el.parentElement; p; p = p.parentElement)
+    if (p.classList.contains("widget-box") || p.classList.contains("widget-container")) root = p;
+  return root;
+}
+
+function watchControls(el) {
+  let observer = null, tries = 0;
+  const attach = () => {
+    if (!el.isConnected) { if (tries++ < 200) setTimeout(attach, 50); return; }
+    const root = explorerRoot(el);
+    nameControls(root);
+    observer = new MutationObserver(() => nameControls(root));
+    observer.observe(root, {childList: true, subtree: true});
+  };
+  attach();
+  return () => { if (observer) observer.disconnect(); tries = 1e9; };
+}
+
 function render({ model, el }) {
   const canvas = document.createElement("canvas");
   canvas.className = "course-figure-canvas";
   canvas.style.display = "block";
   canvas.style.touchAction = "none";
+  // the figure's text alternative, written by the kernel from the figure's data every frame
+  canvas.setAttribute("role", "img");
+  const describe = () => canvas.setAttribute("aria-label", model.get("alt") || "figure");
+  describe();
+  model.on("change:alt", describe);
+  const unwatch = watchControls(el);
   el.classList.add("course-figure");
   el.appendChild(canvas);
   const ctx = canvas.getContext("2d");
@@ -241,7 +288,10 @@ function render({ model, el }) {
   paint();
   const ratio = window.devicePixelRatio || 1;
   if (ratio !== model.get("ratio")) model.send({type: "ratio", ratio});
-  return () => { model.off("change:frame", paint); model.off("change:ratio", paint); };
+  return () => {
+    model.off("change:frame", paint); model.off("change:ratio", paint);
+    model.off("change:alt", describe); unwatch();
+  };
 }
 
 export default { render };
@@ -263,6 +313,9 @@ class FigureCanvas(anywidget.AnyWidget):
         The changing artists, packed by :func:`course_lib.widgets._scene.pack`.
     frame : int
         Counts the frames sent (shown by the page as the canvas' ``data-frame``).
+    alt : str
+        The figure's text alternative (the canvas is ``role="img"`` with it as ``aria-label``),
+        written from the figure's data by :func:`course_lib.plots.describe.alt_text`.
     """
 
     _esm = _ESM
@@ -273,10 +326,15 @@ class FigureCanvas(anywidget.AnyWidget):
     background = traitlets.Bytes(b"").tag(sync=True)
     scene = traitlets.Bytes(b"").tag(sync=True)
     frame = traitlets.Int(0).tag(sync=True)
+    alt = traitlets.Unicode("").tag(sync=True)
 
-    def show(self, *, scene: bytes, size: tuple[int, int], background: bytes | None = None):
-        """Send one frame (and a new background, if given) in one message."""
+    def show(self, *, scene: bytes, size: tuple[int, int], background: bytes | None = None,
+             alt: str | None = None):
+        """Send one frame (and a new background, or text alternative, if given) in one
+        message."""
         with self.hold_sync():
+            if alt is not None:
+                self.alt = alt
             self.width, self.height = int(size[0]), int(size[1])
             if background is not None:
                 self.background = background

@@ -62,10 +62,12 @@ from matplotlib.legend import Legend
 from matplotlib.patches import Patch
 from matplotlib.layout_engine import PlaceHolderLayoutEngine
 
+from ..plots.describe import alt_text
 from ._scene import SceneRenderer, pack
 
 __all__ = ["Blitter", "ExplorerCanvas", "FairLock", "FigureExplorer", "FigureView", "KeptPictures",
-           "ScenePainter", "figure_lock", "one_at_a_time", "one_message_at_a_time", "readout_html",
+           "ScenePainter", "figure_lock", "mark_live_readouts", "one_at_a_time", "one_message_at_a_time",
+           "readout_html",
            "use_blitting"]
 
 
@@ -190,6 +192,24 @@ def one_message_at_a_time(layout, fig):
                 handle(msg)
 
         comm.on_msg(locked)
+    mark_live_readouts(layout)
+    return layout
+
+
+def mark_live_readouts(layout):
+    """Give the explorer's text readouts (its ``HTML`` and ``Label`` widgets; not the typeset
+    formulas, which a screen reader would spell out on every move) the class ``course-live``:
+    the figure canvas' page code makes them ``aria-live="polite"`` status regions, so a
+    screen reader announces what a control's move changed. Returns ``layout``."""
+    todo, seen = [layout], set()
+    while todo:
+        widget = todo.pop()
+        if id(widget) in seen:
+            continue
+        seen.add(id(widget))
+        todo.extend(getattr(widget, "children", ()))
+        if type(widget) in (W.HTML, W.Label):
+            widget.add_class("course-live")
     return layout
 
 
@@ -442,7 +462,8 @@ class ScenePainter(Blitter):
             items.extend(kept)
         width, height = (int(round(v)) for v in self.fig.bbox.size)
         self.widget.show(scene=pack(items, scene.clips, scene.height), size=(width, height),
-                         background=self.background if new_background else None)
+                         background=self.background if new_background else None,
+                         alt=alt_text(self.fig))
 
     # -- messages from the page -------------------------------------------------------------
     def _on_msg(self, _widget, content, _buffers):

@@ -1,0 +1,126 @@
+"""Every student can use the course: WCAG 2.1 AA in the notebooks and explorers, in Chromium.
+
+Each release notebook is opened in the student view (``python -m autograder lab --role
+student``: nbgrader's release, the students' JupyterLab extensions), Run All is chosen, and:
+
+* axe-core 4 (WCAG 2.0/2.1, levels A and AA) runs on the notebook's content ``.jp-Notebook``
+  (not JupyterLab's own menus and panels): no serious or critical violation, except the rules
+  named in :data:`EXCEPTIONS` with the reason;
+* every figure output is an image whose text alternative is written from its data (more than a
+  caption: at least :data:`MIN_ALT_WORDS` words and some numbers), and the explorer's canvas is
+  ``role="img"`` with such an ``aria-label``;
+* the explorer is driven by the keyboard only (Tab to a control, arrow keys): the figure
+  changes, its label follows, its readout is a live region; axe runs on the explorer after the
+  presses too.
+
+JupyterLab draws every cell here (``windowingMode: none``), so axe sees the whole notebook.
+The violations found are written to ``test-artifacts/browser/axe-<notebook>.json``.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import socket
+import time
+
+import pytest
+
+from a11y import counts, describe, run_axe, save, severe
+from autograder.course import nbgrader_env
+from labtools import running_lab
+from test_explorers_in_lab import FIGURE_CANVAS, _wait_idle, canvas_pixels, wait_for_change
+
+pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.xdist_group("browser")]
+
+NOTEBOOKS = ("q1_imaging", "q2_nuclear", "q3_marching_cubes", "q4_splines", "q5_phong",
+             "q6_clipping")
+#: rules accepted, with why (none today)
+EXCEPTIONS: dict[str, str] = {}
+MIN_ALT_WORDS = 12
+
+
+def _port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def student_lab(tmp_path_factory, repo_root):
+    """The student view of the release (this checkout's ``course_lib``, so what is tested is
+    what is committed), every cell drawn."""
+    tmp = tmp_path_factory.mktemp("a11y-lab")
+    settings = tmp / "lab-settings" / "@jupyterlab"
+    (settings / "notebook-extension").mkdir(parents=True)
+    (settings / "notebook-extension" / "tracker.jupyterlab-settings").write_text(
+        json.dumps({"windowingMode": "none"}))
+    (settings / "apputils-extension").mkdir(parents=True)
+    (settings / "apputils-extension" / "notification.jupyterlab-settings").write_text(
+        json.dumps({"fetchNews": "false"}))
+    env = dict(nbgrader_env(), JUPYTERLAB_SETTINGS_DIR=str(tmp / "lab-settings"))
+    env.pop("MPLBACKEND", None)
+    args = ["--role", "student", "--course-root", str(tmp / "course")]
+    with running_lab(args, _port(), tmp / "lab.log", repo_root, env, "the student lab") as url:
+        yield url.split("/lab", 1)[0], url.split("?", 1)[1]
+
+
+@pytest.fixture(scope="module", params=NOTEBOOKS)
+def ran(request, browser, student_lab, artifacts):
+    """``(name, page)``: the release notebook ``name`` after Run All, its kernel idle."""
+    name = request.param
+    base, query = student_lab
+    context = browser.new_context(viewport={"width": 1400, "height": 1000})
+    page = context.new_page()
+    page.set_default_timeout(60_000)
+    try:
+        page.goto(f"{base}/lab/tree/tripos2006/{name}.ipynb?{query}&reset")
+        page.wait_for_selector(".jp-NotebookPanel .jp-Notebook .jp-Cell")
+        _wait_idle(page, 120)
+        page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
+        page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+        time.sleep(1.0)
+        _wait_idle(page, 600)
+        page.locator(FIGURE_CANVAS).first.wait_for(timeout=120_000)
+        _wait_idle(page, 120)
+        time.sleep(1.0)
+        yield name, page
+    finally:
+        sessions = page.request.get(f"{base}/api/sessions?{query}").json()
+        for s in sessions:
+            page.request.delete(f"{base}/api/sessions/{s['id']}?{query}")
+        context.close()
+
+
+def test_notebook_has_no_serious_violations(ran, artifacts):
+    name, page = ran
+    found = run_axe(page, ".jp-NotebookPanel .jp-Notebook")
+    save(artifacts / f"axe-{name}.json", found)
+    print(f"{name}: serious/critical", dict(counts(found)))
+    bad = severe(found, EXCEPTIONS)
+    assert not bad, f"{name}: axe found\n{describe(bad)}"
+
+
+def _alt_texts(page) -> list[tuple[str, str]]:
+    """``(kind, text)`` of every figure in the notebook's outputs: images and canvases."""
+    return page.evaluate("""() => {
+      const out = [];
+      for (const img of document.querySelectorAll('.jp-Notebook .jp-OutputArea-output img'))
+        out.push(['img', img.getAttribute('alt') || '']);
+      for (const c of document.querySelectorAll('.jp-Notebook canvas.course-figure-canvas')) {
+        const host = c.closest('[role=img]') || c;
+        out.push(['canvas', host.getAttribute('role') === 'img'
+                  ? (host.getAttribute('aria-label') || '') : '']);
+      }
+      return out;
+    }""")
+
+
+def test_every_figure_has_a_text_alternative_from_its_data(ran):
+    name, page = ran
+    figures = _alt_texts(page)
+    assert any(kind == "img" for kind, _ in figures), f"{name}: no static figure drawn"
+    assert any(kind == "canvas" for kind, _ in figures), f"{name}: no explorer drawn"
+    thin = [(kind, text) for kind, text in figures
+            if len(text.split()) < MIN_ALT_WORDS or not re.search(r"\d", text)]
+    assert not thin, f"{name}: figures without a text alternative written from data: {thin}"
