@@ -9,14 +9,18 @@ from __future__ import annotations
 
 import matplotlib.pyplot as plt
 
-#: Colours used across the course: reference/expected vs student/received, etc.
+#: Colours used across the course: reference/expected vs student/received, etc. Okabe and Ito's
+#: palette for colour-blind viewers (with a darker grey): every two of them stay at least 10
+#: apart in CAM02-UCS under simulated deuteranopia, protanopia and tritanopia
+#: (``tests/course_lib/test_colours.py``), and figures tell their curves apart by line style,
+#: marker or a label as well, never by colour alone.
 COLOURS = {
-    "curve": "#1f77b4",
-    "control": "#7f7f7f",
-    "highlight": "#d62728",
-    "reference": "#2ca02c",
-    "received": "#ff7f0e",
-    "hull": "#9467bd",
+    "curve": "#0072b2",
+    "control": "#555555",
+    "highlight": "#d55e00",
+    "reference": "#009e73",
+    "received": "#e69f00",
+    "hull": "#cc79a7",
 }
 
 

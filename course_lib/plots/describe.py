@@ -34,14 +34,16 @@ def num(value) -> str:
     return f"{value:.3g}".replace("e+0", "e").replace("e-0", "e-")
 
 
-def set_summary(fig, text: str) -> None:
-    """What ``fig`` shows, in a sentence or two with its numbers (put first in its
-    :func:`alt_text`). Plot functions call it; explorers call it again when they move."""
-    setattr(fig, _SUMMARY, " ".join(str(text).split()))
+def set_summary(where, text: str) -> None:
+    """What a figure or one of its axes (``where``) shows, in a sentence or two with its
+    numbers: put first in the figure's :func:`alt_text` or first in that panel's description.
+    Plot functions call it; explorers call it again when they move."""
+    setattr(where, _SUMMARY, " ".join(str(text).split()))
 
 
-def summary(fig) -> str:
-    return getattr(fig, _SUMMARY, "") or ""
+def summary(where) -> str:
+    """The text :func:`set_summary` gave a figure or axes (``""`` if none)."""
+    return getattr(where, _SUMMARY, "") or ""
 
 
 def alt_text(fig) -> str:
@@ -91,8 +93,8 @@ def describe_axes(ax) -> str:
     names = ("x", "y", "z") if ax.name == "3d" else ("x", "y")
     title = " ".join(_clean(t) for t in (ax.get_title("left"), ax.get_title(),
                                          ax.get_title("right")) if t)
-    parts = [f"{title}." if title else ""]
-    if ax.axison:
+    parts = [f"{title}." if title else "", summary(ax)]
+    if ax.axison or ax.name == "3d":   # a 3-D box's range is its content, shown or not
         parts.append("; ".join(_axis(ax, n) for n in names) + ".")
     parts += _lines(ax) + _images(ax) + _collections(ax) + _bars(ax) + _texts(ax) + _legend(ax)
     return " ".join(p for p in parts if p)
@@ -144,13 +146,31 @@ def _images(ax) -> list[str]:
     for im in ax.images:
         if not im.get_visible():
             continue
-        arr = np.asarray(im.get_array(), dtype=float)
+        arr = np.ma.filled(np.ma.asarray(im.get_array(), dtype=float), np.nan)
         what = f"An image of {arr.shape[1]} by {arr.shape[0]} pixels"
         if arr.ndim == 2 and np.isfinite(arr).any():
             what += (f", values from {num(np.nanmin(arr))} to {num(np.nanmax(arr))} "
                      f"shown on the {im.get_cmap().name} colour map")
+        elif arr.ndim == 3 and arr.shape[2] >= 3 and np.isfinite(arr).any():
+            what += _brightness(arr)
         out.append(what + ".")
     return out
+
+
+def _brightness(rgb) -> str:
+    """Where a colour image is brightest and darkest (relative luminance, 0 to 1), and its
+    mean: what a student reads off a shaded sphere or a swatch."""
+    scale = 255.0 if np.nanmax(rgb[..., :3]) > 1.0 else 1.0
+    lum = rgb[..., :3] @ np.array([0.2126, 0.7152, 0.0722]) / scale
+    if rgb.shape[2] == 4:                     # transparent pixels are background, not image
+        lum = np.where(rgb[..., 3] > 0, lum, np.nan)
+    if not np.isfinite(lum).any():
+        return ""
+    hi = np.unravel_index(np.nanargmax(lum), lum.shape)
+    lo = np.unravel_index(np.nanargmin(lum), lum.shape)
+    return (f", brightest {num(lum[hi])} at column {hi[1]}, row {hi[0]}, darkest "
+            f"{num(lum[lo])} at column {lo[1]}, row {lo[0]}, mean brightness "
+            f"{num(np.nanmean(lum))}")
 
 
 def _collection(c) -> str:
@@ -167,7 +187,8 @@ def _collection(c) -> str:
     if isinstance(c, QuadMesh):
         arr = np.asarray(c.get_array(), dtype=float)
         return f"a colour-mapped grid{name} of values {num(np.nanmin(arr))} to {num(np.nanmax(arr))}"
-    n = len(c.get_paths())
+    faces = getattr(c, "_segments3d", None)     # a 3-D collection has no 2-D paths until drawn
+    n = len(faces) if faces is not None else len(c.get_paths())
     kind = "line segments" if isinstance(c, LineCollection) else "filled shapes"
     return f"{n} {kind}{name}" if n else ""
 

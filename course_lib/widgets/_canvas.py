@@ -174,6 +174,15 @@ function nameControls(root) {
     if (readout && readout.getAttribute("aria-label") !== `${name}, value`)
       readout.setAttribute("aria-label", `${name}, value`);
   }
+  // other inputs beside a description (a colour picker's <input type="color">, ...)
+  for (const box of root.querySelectorAll(".widget-inline-hbox")) {
+    const label = box.querySelector(":scope > .widget-label");
+    const name = label ? label.textContent.trim() : "";
+    if (!name) continue;
+    for (const input of box.querySelectorAll("input, select, textarea"))
+      if (!input.getAttribute("aria-label") && !(input.id && label.htmlFor === input.id))
+        input.setAttribute("aria-label", name);
+  }
   for (const live of root.querySelectorAll(".course-live"))
     if (live.getAttribute("aria-live") !== "polite") {
       live.setAttribute("aria-live", "polite"); live.setAttribute("role", "status");

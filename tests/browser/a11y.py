@@ -67,11 +67,20 @@ def counts(violations: list[dict], impacts=SEVERE) -> Counter:
     return out
 
 
-def severe(violations: list[dict], exceptions: dict[str, str] | None = None) -> list[dict]:
-    """The serious and critical violations, less the rules named in ``exceptions``
-    (``{rule id: why it is accepted}``)."""
-    exceptions = exceptions or {}
-    return [v for v in violations if v["impact"] in SEVERE and v["id"] not in exceptions]
+def severe(violations: list[dict], exceptions=()) -> list[dict]:
+    """The serious and critical violations, less the elements that ``exceptions`` accepts:
+    ``(rule id, a piece of the element's HTML, why)`` triples (an exception names the rule
+    and the element, so the same rule on any other element still fails)."""
+    out = []
+    for v in violations:
+        if v["impact"] not in SEVERE:
+            continue
+        nodes = [n for n in v["nodes"]
+                 if not any(rule == v["id"] and marker in n["html"]
+                            for rule, marker, _why in exceptions)]
+        if nodes:
+            out.append(dict(v, nodes=nodes))
+    return out
 
 
 def describe(violations: list[dict], limit: int = 12) -> str:
