@@ -166,7 +166,8 @@ function paintScene(ctx, scene, scratch, hatches) {
 function nameControls(root) {
   for (const slider of root.querySelectorAll(".widget-slider")) {
     const label = slider.querySelector(".widget-label");
-    const name = ((slider.getAttribute("title") || "") || (label ? label.textContent : "")).trim();
+    // the slider's tooltip (ipywidgets puts it on the label) when it has one: a fuller name
+    const name = (label ? (label.title || label.textContent) : "").trim();
     if (!name) continue;
     for (const handle of slider.querySelectorAll(".noUi-handle, [role=slider]"))
       if (handle.getAttribute("aria-label") !== name) handle.setAttribute("aria-label", name);
