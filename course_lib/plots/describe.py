@@ -31,7 +31,11 @@ def num(value) -> str:
     value = float(value)
     if not np.isfinite(value):
         return str(value)
-    return f"{value:.3g}".replace("e+0", "e").replace("e-0", "e-")
+    if value == 0 or not 1e-3 <= abs(value) < 1e6:
+        return f"{value:.3g}".replace("e+0", "e").replace("e-0", "e-")
+    digits = 2 - int(np.floor(np.log10(abs(value))))    # decimals that keep 3 figures
+    text = f"{round(value, digits):.{max(digits, 0)}f}"
+    return text.rstrip("0").rstrip(".") if "." in text else text
 
 
 def set_summary(where, text: str) -> None:

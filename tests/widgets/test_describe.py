@@ -146,3 +146,42 @@ def test_spline_explorer_label_gives_the_moved_point():
     canvas = ex._view.widget(ex.fig)
     ex.set_point(len(ex.points) - 1, (5.25, -1.5))
     assert "to (5.25, -1.5)" in canvas.alt, canvas.alt
+
+
+def test_bscan_text_gives_each_block_as_drawn():
+    """Q1(c): a block of speed c is drawn (c_assumed / c) times its thickness: the text
+    alternative says so for the exam's phantom (fat 1450 m/s, liver 1578 m/s, 1540 assumed)."""
+    from course_lib import ultrasound as us
+    from course_lib.plots.ultrasound import bscan_summary
+
+    phantom = us.exam_phantom()
+    text = bscan_summary(phantom)
+    for name, _x0, _x1, z0, z1 in phantom["blocks"]:
+        c = us.material_properties(name)["c"]
+        m = re.search(rf"{name} block [^;]*drawn from [\d.]+ to [\d.]+ mm \(([\d.]+) mm\)", text)
+        assert m, text
+        assert float(m.group(1)) == pytest.approx((z1 - z0) * 1540.0 / c, rel=5e-3)
+
+
+def test_bscan_explorer_text_follows_the_speed():
+    from course_lib.widgets.ultrasound import bscan_explorer
+
+    ex = bscan_explorer()
+    assert ex.widget is not None
+    canvas = ex._view.widget(ex.fig)
+    fat = re.search(r"fat block [^;]*\(([\d.]+) mm\);", canvas.alt)
+    slider = next(w for w in _sliders(ex.widget) if w.description == "fat speed (m/s)")
+    slider.value = slider.max
+    fat_after = re.search(r"fat block [^;]*\(([\d.]+) mm\);", canvas.alt)
+    assert float(fat_after.group(1)) < float(fat.group(1))   # faster fat: drawn thinner
+
+
+def _sliders(layout):
+    import ipywidgets as W
+
+    todo = [layout]
+    while todo:
+        w = todo.pop()
+        todo.extend(getattr(w, "children", ()))
+        if isinstance(w, W.FloatSlider):
+            yield w
