@@ -131,6 +131,8 @@ def _alt_texts(page) -> list[tuple[str, str]]:
 def test_every_figure_has_a_text_alternative_from_its_data(ran):
     name, page = ran
     figures = _alt_texts(page)
+    print(f"{name}: {sum(k == 'img' for k, _ in figures)} figures, "
+          f"{sum(k == 'canvas' for k, _ in figures)} explorer canvases")
     assert any(kind == "img" for kind, _ in figures), f"{name}: no static figure drawn"
     assert any(kind == "canvas" for kind, _ in figures), f"{name}: no explorer drawn"
     thin = [(kind, text) for kind, text in figures
