@@ -98,6 +98,9 @@ def describe_axes(ax) -> str:
     title = " ".join(_clean(t) for t in (ax.get_title("left"), ax.get_title(),
                                          ax.get_title("right")) if t)
     parts = [f"{title}." if title else "", summary(ax)]
+    if ax.name == "3d":
+        parts.append(f"A 3-D view seen from azimuth {num(ax.azim)} degrees, elevation "
+                     f"{num(ax.elev)} degrees.")
     if ax.axison or ax.name == "3d":   # a 3-D box's range is its content, shown or not
         parts.append("; ".join(_axis(ax, n) for n in names) + ".")
     parts += _lines(ax) + _images(ax) + _collections(ax) + _bars(ax) + _texts(ax) + _legend(ax)

@@ -221,6 +221,20 @@ function render({ model, el }) {
   describe();
   model.on("change:alt", describe);
   const unwatch = watchControls(el);
+  // a figure with a 3-D view: a Tab stop whose arrow keys turn the view (as dragging does)
+  const keyable = () => {
+    if (model.get("turnable")) {
+      canvas.tabIndex = 0;
+      canvas.setAttribute("aria-keyshortcuts", "ArrowLeft ArrowRight ArrowUp ArrowDown");
+    } else { canvas.removeAttribute("tabindex"); canvas.removeAttribute("aria-keyshortcuts"); }
+  };
+  keyable();
+  model.on("change:turnable", keyable);
+  canvas.addEventListener("keydown", (e) => {
+    if (!model.get("turnable") || !e.key.startsWith("Arrow")) return;
+    e.preventDefault(); e.stopPropagation();   // not JupyterLab's move to another cell
+    model.send({type: "key", key: e.key, shift: e.shiftKey});
+  });
   el.classList.add("course-figure");
   el.appendChild(canvas);
   const ctx = canvas.getContext("2d");
@@ -300,7 +314,7 @@ function render({ model, el }) {
   if (ratio !== model.get("ratio")) model.send({type: "ratio", ratio});
   return () => {
     model.off("change:frame", paint); model.off("change:ratio", paint);
-    model.off("change:alt", describe); unwatch();
+    model.off("change:alt", describe); model.off("change:turnable", keyable); unwatch();
   };
 }
 
@@ -326,10 +340,14 @@ class FigureCanvas(anywidget.AnyWidget):
     alt : str
         The figure's text alternative (the canvas is ``role="img"`` with it as ``aria-label``),
         written from the figure's data by :func:`course_lib.plots.describe.alt_text`.
+    turnable : bool
+        The canvas takes the focus and sends its arrow keys to the kernel (a 3-D view, which
+        they turn).
     """
 
     _esm = _ESM
-    _css = ".course-figure { line-height: 0; }"
+    _css = (".course-figure { line-height: 0; }"
+            " .course-figure-canvas:focus-visible { outline: 3px solid #0072b2; }")
     width = traitlets.Int(0).tag(sync=True)
     height = traitlets.Int(0).tag(sync=True)
     ratio = traitlets.Float(1.0).tag(sync=True)
@@ -337,6 +355,7 @@ class FigureCanvas(anywidget.AnyWidget):
     scene = traitlets.Bytes(b"").tag(sync=True)
     frame = traitlets.Int(0).tag(sync=True)
     alt = traitlets.Unicode("").tag(sync=True)
+    turnable = traitlets.Bool(False).tag(sync=True)
 
     def show(self, *, scene: bytes, size: tuple[int, int], background: bytes | None = None,
              alt: str | None = None):

@@ -421,6 +421,8 @@ class ScenePainter(Blitter):
         self._renderer = None
         self._kept = KeptPictures()          # each unchanged artist's recorded items
         canvas_widget.on_msg(self._on_msg)
+        # a 3-D view turns by dragging it, and by the arrow keys on the focused canvas
+        canvas_widget.turnable = any(ax.name == "3d" for ax in fig.axes)
 
     def _forget_pictures(self) -> None:
         self._kept.clear()
@@ -473,6 +475,29 @@ class ScenePainter(Blitter):
             self._set_ratio(content.get("ratio"))
         elif content.get("type") == "mouse":
             self._mouse(content)
+        elif content.get("type") == "key":
+            self._turn(content)
+
+    #: degrees of a 3-D view's turn per arrow key (with Shift: three times as many)
+    TURN_DEG = 5.0
+
+    def _turn(self, content):
+        """An arrow key on the canvas: turn every 3-D axes of the figure (left/right: azimuth,
+        up/down: elevation, kept within +-90 degrees), what dragging the view does by mouse.
+        Other keys, and figures without a 3-D axes, are ignored."""
+        steps = {"ArrowLeft": (0, -1), "ArrowRight": (0, 1), "ArrowUp": (1, 0),
+                 "ArrowDown": (-1, 0)}
+        if content.get("key") not in steps:
+            return
+        de, da = (self.TURN_DEG * (3 if content.get("shift") else 1) * s
+                  for s in steps[content["key"]])
+        with figure_lock(self.fig):
+            axes = [ax for ax in self.fig.axes if ax.name == "3d"]
+            for ax in axes:
+                ax.view_init(elev=float(np.clip(ax.elev + de, -90.0, 90.0)),
+                             azim=(ax.azim + da + 180.0) % 360.0 - 180.0, roll=ax.roll)
+            if axes:
+                self.redraw()
 
     def _set_ratio(self, ratio):
         """The page's ``devicePixelRatio`` (0.5 to 4; anything else is ignored): the figure is

@@ -197,6 +197,17 @@ def test_explorer_by_keyboard_only(ran, artifacts):
     assert canvas.get_attribute("aria-label") != label_before, \
         f"{name}: the canvas' text alternative did not follow the figure"
     assert out.locator("[aria-live=polite]").count() >= 1, f"{name}: no live readout"
+    if canvas.get_attribute("tabindex") == "0":   # a 3-D view: its arrow keys turn it
+        out.locator("button, select, input, [role=slider]").first.focus()
+        page.keyboard.press("Shift+Tab")
+        assert canvas.evaluate("el => document.activeElement === el"), \
+            f"{name}: Shift+Tab from the first control does not reach the 3-D figure"
+        label, pixels = canvas.get_attribute("aria-label"), canvas_pixels(canvas)
+        for _ in range(3):
+            page.keyboard.press("ArrowRight")
+        assert wait_for_change(canvas, pixels) >= 0.002, f"{name}: the 3-D view did not turn"
+        assert re.search(r"azimuth -?[\d.]+ degrees", canvas.get_attribute("aria-label") or "")
+        assert canvas.get_attribute("aria-label") != label
     for _ in range(80):                       # no focus trap: Tab leaves the explorer
         page.keyboard.press("Tab")
         if not _focused(page)["inside"]:

@@ -185,3 +185,30 @@ def _sliders(layout):
         todo.extend(getattr(w, "children", ()))
         if isinstance(w, W.FloatSlider):
             yield w
+
+
+def test_arrow_keys_turn_a_3d_view_as_dragging_does():
+    """What the mouse does to a 3-D view the keyboard does too: an arrow key on the focused
+    canvas (a message from the page) turns the view by TURN_DEG, a new frame is sent and the
+    text alternative gives the new angles. A 2-D figure's canvas takes no keys."""
+    from course_lib.widgets.marching_cubes import case_explorer
+    from course_lib.widgets.shading import phong_explorer
+
+    ex = case_explorer(1)
+    assert ex.widget is not None
+    canvas = ex._view.widget(ex.fig)
+    painter = ex._view.blitter
+    ax = next(a for a in ex.fig.axes if a.name == "3d")
+    assert canvas.turnable
+    azim, elev, frame = ax.azim, ax.elev, canvas.frame
+    painter._on_msg(canvas, {"type": "key", "key": "ArrowRight"}, [])
+    painter._on_msg(canvas, {"type": "key", "key": "ArrowUp", "shift": True}, [])
+    painter._on_msg(canvas, {"type": "key", "key": "Enter"}, [])        # ignored
+    assert ax.azim == pytest.approx(azim + painter.TURN_DEG)
+    assert ax.elev == pytest.approx(elev + 3 * painter.TURN_DEG)
+    assert canvas.frame == frame + 2
+    assert f"azimuth {num(ax.azim)} degrees, elevation {num(ax.elev)} degrees" in canvas.alt
+
+    flat = phong_explorer()
+    assert flat.widget is not None
+    assert not flat._view.widget(flat.fig).turnable
