@@ -198,12 +198,17 @@ function explorerRoot(el) {
 }
 
 function watchControls(el) {
-  let observer = null, tries = 0;
+  let observer = null, tries = 0, pending = false;
   const attach = () => {
     if (!el.isConnected) { if (tries++ < 200) setTimeout(attach, 50); return; }
     const root = explorerRoot(el);
     nameControls(root);
-    observer = new MutationObserver(() => nameControls(root));
+    // readouts change with every frame: look again once they have settled, not per change
+    observer = new MutationObserver(() => {
+      if (pending) return;
+      pending = true;
+      setTimeout(() => { pending = false; nameControls(root); }, 100);
+    });
     observer.observe(root, {childList: true, subtree: true});
   };
   attach();
@@ -357,13 +362,9 @@ class FigureCanvas(anywidget.AnyWidget):
     alt = traitlets.Unicode("").tag(sync=True)
     turnable = traitlets.Bool(False).tag(sync=True)
 
-    def show(self, *, scene: bytes, size: tuple[int, int], background: bytes | None = None,
-             alt: str | None = None):
-        """Send one frame (and a new background, or text alternative, if given) in one
-        message."""
+    def show(self, *, scene: bytes, size: tuple[int, int], background: bytes | None = None):
+        """Send one frame (and a new background, if given) in one message."""
         with self.hold_sync():
-            if alt is not None:
-                self.alt = alt
             self.width, self.height = int(size[0]), int(size[1])
             if background is not None:
                 self.background = background

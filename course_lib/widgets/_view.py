@@ -420,6 +420,7 @@ class ScenePainter(Blitter):
         self._ratio = 1.0                  # the page's pixels per CSS pixel, as last reported
         self._renderer = None
         self._kept = KeptPictures()          # each unchanged artist's recorded items
+        self._describing = None              # the scheduled rewrite of the text alternative
         canvas_widget.on_msg(self._on_msg)
         # a 3-D view turns by dragging it, and by the arrow keys on the focused canvas
         canvas_widget.turnable = any(ax.name == "3d" for ax in fig.axes)
@@ -464,8 +465,27 @@ class ScenePainter(Blitter):
             items.extend(kept)
         width, height = (int(round(v)) for v in self.fig.bbox.size)
         self.widget.show(scene=pack(items, scene.clips, scene.height), size=(width, height),
-                         background=self.background if new_background else None,
-                         alt=alt_text(self.fig))
+                         background=self.background if new_background else None)
+        self._describe()
+
+    #: the canvas' text alternative is rewritten at most this long after a frame (s)
+    DESCRIBE_AFTER_S = 0.25
+
+    def _describe(self):
+        """Rewrite the canvas' text alternative (``alt``, its ``aria-label``) from the figure:
+        at once without an event loop (headless), else once, :attr:`DESCRIBE_AFTER_S` after
+        the frame, off the key-to-pixels path; the frames of a drag in between are not
+        described, the last one is."""
+        loop = _running_loop()
+        if loop is None:
+            self.widget.alt = alt_text(self.fig)
+        elif self._describing is None:
+            self._describing = loop.call_later(self.DESCRIBE_AFTER_S, self._describe_now)
+
+    def _describe_now(self):
+        with figure_lock(self.fig):
+            self._describing = None
+            self.widget.alt = alt_text(self.fig)
 
     # -- messages from the page -------------------------------------------------------------
     def _on_msg(self, _widget, content, _buffers):
