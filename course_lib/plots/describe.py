@@ -38,16 +38,19 @@ def num(value) -> str:
     return text.rstrip("0").rstrip(".") if "." in text else text
 
 
-def set_summary(where, text: str) -> None:
+def set_summary(where, text) -> None:
     """What a figure or one of its axes (``where``) shows, in a sentence or two with its
     numbers: put first in the figure's :func:`alt_text` or first in that panel's description.
-    Plot functions call it; explorers call it again when they move."""
-    setattr(where, _SUMMARY, " ".join(str(text).split()))
+    Plot functions call it; explorers call it again when they move. ``text`` may be a
+    function of no arguments returning the text, called only when the text is asked for (an
+    explorer's update then costs nothing more)."""
+    setattr(where, _SUMMARY, text if callable(text) else " ".join(str(text).split()))
 
 
 def summary(where) -> str:
     """The text :func:`set_summary` gave a figure or axes (``""`` if none)."""
-    return getattr(where, _SUMMARY, "") or ""
+    text = getattr(where, _SUMMARY, "") or ""
+    return " ".join(str(text()).split()) if callable(text) else text
 
 
 def alt_text(fig) -> str:
