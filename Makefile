@@ -11,8 +11,8 @@ PORT   ?= 8888
 # make lab: the students' own environment (their wheel only, none of this repository's sources)
 STUDENT_VENV := .venv-student
 
-.PHONY: lab instructor test test-fast bench browser-deps sandbox-deps wheel-deps postgres-deps mathjax-deps \
-        hub hub-deps clean
+.PHONY: lab instructor test test-fast bench browser-deps a11y-deps sandbox-deps wheel-deps \
+        postgres-deps mathjax-deps hub hub-deps clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -46,6 +46,23 @@ mathjax-deps:
 	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libjs-mathjax >/dev/null 2>&1) \
 	      || echo "warning: could not install libjs-mathjax; the Formgrader will load MathJax from its CDN"; \
 	  else echo "warning: not root, cannot apt-get install libjs-mathjax; the Formgrader will load MathJax from its CDN"; fi; \
+	fi
+
+## a11y-deps: axe-core 4 from the npm registry into .cache/axe/ (git-ignored), injected by the
+## browser tests of accessibility (tests/browser/test_accessibility.py); Debian's nodejs and npm
+## first when missing
+AXE_DIR := .cache/axe
+AXE_JS  := $(AXE_DIR)/node_modules/axe-core/axe.min.js
+a11y-deps:
+	@if ! command -v npm >/dev/null 2>&1; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends nodejs npm >/dev/null 2>&1) \
+	      || echo "warning: could not install nodejs/npm; the accessibility tests will be skipped"; \
+	  else echo "warning: not root, cannot apt-get install npm; the accessibility tests will be skipped"; fi; \
+	fi
+	@if [ ! -f $(AXE_JS) ] && command -v npm >/dev/null 2>&1; then \
+	  mkdir -p $(AXE_DIR) && npm install --silent --no-audit --no-fund --prefix $(AXE_DIR) axe-core@4 \
+	    || echo "warning: npm could not install axe-core; the accessibility tests will be skipped"; \
 	fi
 
 ## sandbox-deps: Debian's bubblewrap, the grading sandbox, and libseccomp2, its seccomp filter
@@ -104,7 +121,7 @@ hub: $(STAMP) hub-deps wheel-deps sandbox-deps
 	$(BIN)/python deploy/hub.py --state $(HUB_STATE) up --port $(HUB_PORT) --ip $(HUB_IP)
 
 ## test: the whole suite (library, notebooks, grading bank, browser): about 17 minutes on 2 cores
-test: $(STAMP) browser-deps sandbox-deps wheel-deps postgres-deps hub-deps mathjax-deps
+test: $(STAMP) browser-deps a11y-deps sandbox-deps wheel-deps postgres-deps hub-deps mathjax-deps
 	@echo "make test: the whole suite, about 17 minutes on 2 cores (one dot per test; make test-fast: 2-3 minutes)"
 	$(BIN)/python -m pytest -n 2 --dist loadgroup -q
 

@@ -15,6 +15,7 @@ from matplotlib.patches import Rectangle
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from .. import clipping
+from .describe import num, set_summary
 from ..plotting import COLOURS, equal_axes, new_figure
 
 #: Axis labels of non-homogeneous screen space.
@@ -86,6 +87,10 @@ def plot_view_volume(ax=None, label_axes: bool = True):
                 color=COLOURS["reference"])
         ax.text(0.0, -1.25, 1.0, "far $z_s=1$", fontsize=8, ha="center", color=COLOURS["hull"])
     ax.set_box_aspect((2, 2, 1))
+    lo, hi = BOX_MIN, BOX_MAX
+    set_summary(ax, f"The view volume after the divide by w, a wire box: x_s from {num(lo[0])} "
+                    f"to {num(hi[0])}, y_s from {num(lo[1])} to {num(hi[1])}, z_s from "
+                    f"{num(lo[2])} on the near face to {num(hi[2])} on the far face.")
     return {"edges": edges, "near": near, "far": far}
 
 
@@ -160,7 +165,7 @@ def plot_clipping_2d(P, ax=None, dims=(0, 1), clipped=None, title: str | None = 
     i, j = dims
     lo, hi = BOX_MIN[[i, j]], BOX_MAX[[i, j]]
     rect = Rectangle(lo, *(hi - lo), fill=True, facecolor="#f2f2f2",
-                     edgecolor=COLOURS["control"], lw=1.2, label="view volume")
+                     edgecolor=COLOURS["control"], lw=1.2, ls="--", label="view volume")
     ax.add_patch(rect)
     orig = _closed(screen_points(P))[:, [i, j]]
     cl = screen_points(clipped)[:, [i, j]]

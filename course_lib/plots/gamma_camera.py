@@ -305,7 +305,7 @@ def plot_transmission_profile(d, L, source_distance, ax=None, r_max=None):
     r = np.linspace(0.0, r_max, 600)
     exact, exam = gc.transmission_profile(r, d, L, source_distance)
     (le,) = ax.plot(r, exact, color=COLOURS["curve"], label="exact (lens area / hole area)")
-    (lx,) = ax.plot(r, exam, color=COLOURS["highlight"], drawstyle="steps-post",
+    (lx,) = ax.plot(r, exam, color=COLOURS["highlight"], drawstyle="steps-post", linestyle="-.",
                     label="exam: all or nothing")
     cut = [ax.axvline(gc.exam_cutoff_radius(d, L, source_distance), color=COLOURS["highlight"],
                       linestyle="--", linewidth=0.8),
@@ -329,7 +329,7 @@ def plot_model_comparison(holes_xy, d, L, source_distances, collimator_radius, a
     ax = _ax(ax)
     zs = np.asarray(source_distances, dtype=float)
     exam, uni, iso = gc.compare_models(holes_xy, d, L, zs, collimator_radius)
-    (lx,) = ax.plot(zs, 100 * exam, color=COLOURS["highlight"], drawstyle="steps-post",
+    (lx,) = ax.plot(zs, 100 * exam, color=COLOURS["highlight"], drawstyle="steps-post", linestyle="-.",
                     label="exam: all or nothing")
     (lu,) = ax.plot(zs, 100 * uni, color=COLOURS["curve"], label="exact, uniform over the face")
     (li,) = ax.plot(zs, 100 * iso, color=COLOURS["reference"], linestyle="--",

@@ -15,6 +15,7 @@ from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 from .. import marching_cubes as mc
 from .. import mesh
 from ..plotting import COLOURS
+from .describe import num, set_summary
 
 __all__ = [
     "case_values",
@@ -108,6 +109,10 @@ def update_case(art, index: int, alternative: bool = False, iso: float = 0.5, va
     art["surface"].set_verts(list(tris))
     for c, line in enumerate(art["corners"]):
         line.set_markerfacecolor(INSIDE if vals[c] < iso else OUTSIDE)
+    inside = [c for c in range(8) if vals[c] < iso]
+    set_summary(art["corners"][0].axes,
+                f"Inside corners (filled): {', '.join(map(str, inside)) or 'none'}; "
+                f"{len(tris)} triangle{'s' if len(tris) != 1 else ''} at iso-level {num(iso)}.")
     return tris
 
 
@@ -136,7 +141,7 @@ def plot_base_cases(fig=None, alternative: bool = False, mark_ambiguous: bool = 
         arts.append(draw_case(case.index, ax, alternative=alternative,
                               title=f"case {case.number}{star} (index {case.index})"))
     note = " (* = ambiguous face)" if mark_ambiguous else ""
-    fig.suptitle(f"Lorensen's 15 cases{note}; red corners are inside")
+    fig.suptitle(f"Lorensen's 15 cases{note}; filled (red) corners are inside")
     return fig, arts
 
 

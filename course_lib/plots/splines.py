@@ -37,7 +37,9 @@ _SEGMENT_CMAP = plt.get_cmap("viridis")
 _P1_COLOUR = COLOURS["highlight"]
 _P2_COLOUR = "#e377c2"
 _END_COLOUR = "black"
-_WEIGHT_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd")  # weights of a, b, c, d
+#: the weights of a, b, c, d: a colour and a marker each (told apart without the colour)
+_WEIGHT_COLOURS = (COLOURS["curve"], COLOURS["received"], COLOURS["reference"], COLOURS["hull"])
+_WEIGHT_MARKERS = ("o", "s", "^", "D")
 
 
 def spline_scene(points, kind, end_rule=None, phantoms=None, n_per_segment=32):
@@ -216,6 +218,7 @@ def plot_blending_functions(ax=None, n=101):
         W = splines.parameter_row(t) @ splines.basis(kind)
         for j, name in enumerate("abcd"):
             lines += ax.plot(t, W[:, j], style, color=_WEIGHT_COLOURS[j], lw=2,
+                             marker=_WEIGHT_MARKERS[j], markevery=max(1, (n - 1) // 5), ms=4,
                              label=f"{_KIND_TITLE[kind]}: {name}")
     ax.axhline(0.0, color="k", lw=0.5)
     ax.set_xlabel("t")

@@ -12,6 +12,7 @@ from matplotlib.patches import Rectangle
 
 from .. import ultrasound as us
 from ..plotting import COLOURS, new_figure
+from .describe import num, set_summary
 
 #: Fill colours of the materials in the true-geometry panel.
 MATERIAL_COLOURS = {
@@ -116,12 +117,29 @@ def plot_bscan(image, extent, ax=None, phantom=None, speeds=None, c_assumed=us.C
                 shown_lines.append(line)
             shown_lines[-1].set_label("where the scanner draws it")
         ax.legend(loc="upper center", ncol=2, fontsize=7, framealpha=0.8)
+        set_summary(ax, bscan_summary(phantom, speeds, c_assumed))
     ax.set_xlim(extent[0], extent[1])
     ax.set_ylim(extent[2], extent[3])
     ax.set_xlabel("lateral position x (mm)")
     ax.set_ylabel(f"displayed depth (mm), assuming {c_assumed:.0f} m/s")
     ax.set_title("simulated B-scan")
     return {"image": im, "true": true_lines, "displayed": shown_lines, "floor": floor_line}
+
+
+def bscan_summary(phantom, speeds=None, c_assumed=us.C_ASSUMED) -> str:
+    """Q1(c) in words, for the B-scan's text alternative: each block's true depths and
+    thickness and where the scanner draws it, then the floor under a gap and its deepest
+    displayed point (the numbers a student reads off the picture)."""
+    outlines = displayed_outlines(phantom, speeds, c_assumed)
+    parts = []
+    for (name, _x0, _x1, z0, z1), (_xs, zs) in zip(phantom["blocks"], outlines):
+        top, bottom = float(zs[0]), float(zs[2])
+        parts.append(f"{name} block {num(z0)} to {num(z1)} mm deep ({num(z1 - z0)} mm thick) "
+                     f"drawn from {num(top)} to {num(bottom)} mm ({num(bottom - top)} mm)")
+    floor = outlines[-1][1]
+    return (f"Where the scanner, assuming {num(c_assumed)} m/s, draws the phantom: "
+            + "; ".join(parts) + f"; the floor, {num(phantom['floor_depth'])} mm deep, drawn "
+            f"between {num(np.nanmin(floor))} and {num(np.nanmax(floor))} mm.")
 
 
 def displayed_outlines(phantom, speeds=None, c_assumed=us.C_ASSUMED):
@@ -174,7 +192,9 @@ def plot_aline(depth, envelope, x, columns, ax=None, labels=None, phantom=None, 
         j = int(np.argmin(np.abs(x - xc)))
         level = 20 * np.log10(np.maximum(envelope[:, j], 1e-6))
         label = labels[i] if labels else f"x = {x[j]:.1f} mm"
-        (line,) = ax.plot(depth, level, color=colours[i % 4], linewidth=0.8, label=label)
+        # a line style of its own too: the columns are told apart without their colours
+        (line,) = ax.plot(depth, level, color=colours[i % 4], linewidth=0.8, label=label,
+                          linestyle=("-", "--", "-.", ":")[i % 4])
         lines.append(line)
         if phantom is not None:
             _, _true, shown = us.phantom_interfaces(phantom["blocks"], phantom["floor_depth"],

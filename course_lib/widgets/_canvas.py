@@ -159,11 +159,87 @@ function paintScene(ctx, scene, scratch, hatches) {
   }
 }
 
+// Accessibility of the explorer around the canvas: ipywidgets 8 gives a slider's handle (a
+// noUiSlider <div role="slider">) no accessible name, and an HTML readout no live region. The
+// controls are ipywidgets' own views, so the names are set here, on the explorer's outermost
+// widget box, and again whenever its views re-render (a MutationObserver).
+function nameControls(root) {
+  for (const slider of root.querySelectorAll(".widget-slider")) {
+    const label = slider.querySelector(".widget-label");
+    // the slider's tooltip (ipywidgets puts it on the label) when it has one: a fuller name
+    const name = (label ? (label.title || label.textContent) : "").trim();
+    if (!name) continue;
+    for (const handle of slider.querySelectorAll(".noUi-handle, [role=slider]"))
+      if (handle.getAttribute("aria-label") !== name) handle.setAttribute("aria-label", name);
+    const readout = slider.querySelector(".widget-readout");
+    if (readout && readout.getAttribute("aria-label") !== `${name}, value`)
+      readout.setAttribute("aria-label", `${name}, value`);
+  }
+  // other inputs beside a description (a colour picker's <input type="color">, ...)
+  for (const box of root.querySelectorAll(".widget-inline-hbox")) {
+    const label = box.querySelector(":scope > .widget-label");
+    const name = label ? label.textContent.trim() : "";
+    if (!name) continue;
+    for (const input of box.querySelectorAll("input, select, textarea"))
+      if (!input.getAttribute("aria-label") && !(input.id && label.htmlFor === input.id))
+        input.setAttribute("aria-label", name);
+  }
+  for (const live of root.querySelectorAll(".course-live"))
+    if (live.getAttribute("aria-live") !== "polite") {
+      live.setAttribute("aria-live", "polite"); live.setAttribute("role", "status");
+    }
+}
+
+function explorerRoot(el) {
+  let root = el.parentElement || el;
+  for (let p = el.parentElement; p; p = p.parentElement)
+    if (p.classList.contains("widget-box") || p.classList.contains("widget-container")) root = p;
+  return root;
+}
+
+function watchControls(el) {
+  let observer = null, tries = 0, pending = false;
+  const attach = () => {
+    if (!el.isConnected) { if (tries++ < 200) setTimeout(attach, 50); return; }
+    const root = explorerRoot(el);
+    nameControls(root);
+    // readouts change with every frame: look again once they have settled, not per change
+    observer = new MutationObserver(() => {
+      if (pending) return;
+      pending = true;
+      setTimeout(() => { pending = false; nameControls(root); }, 100);
+    });
+    observer.observe(root, {childList: true, subtree: true});
+  };
+  attach();
+  return () => { if (observer) observer.disconnect(); tries = 1e9; };
+}
+
 function render({ model, el }) {
   const canvas = document.createElement("canvas");
   canvas.className = "course-figure-canvas";
   canvas.style.display = "block";
   canvas.style.touchAction = "none";
+  // the figure's text alternative, written by the kernel from the figure's data every frame
+  canvas.setAttribute("role", "img");
+  const describe = () => canvas.setAttribute("aria-label", model.get("alt") || "figure");
+  describe();
+  model.on("change:alt", describe);
+  const unwatch = watchControls(el);
+  // a figure with a 3-D view: a Tab stop whose arrow keys turn the view (as dragging does)
+  const keyable = () => {
+    if (model.get("turnable")) {
+      canvas.tabIndex = 0;
+      canvas.setAttribute("aria-keyshortcuts", "ArrowLeft ArrowRight ArrowUp ArrowDown");
+    } else { canvas.removeAttribute("tabindex"); canvas.removeAttribute("aria-keyshortcuts"); }
+  };
+  keyable();
+  model.on("change:turnable", keyable);
+  canvas.addEventListener("keydown", (e) => {
+    if (!model.get("turnable") || !e.key.startsWith("Arrow")) return;
+    e.preventDefault(); e.stopPropagation();   // not JupyterLab's move to another cell
+    model.send({type: "key", key: e.key, shift: e.shiftKey});
+  });
   el.classList.add("course-figure");
   el.appendChild(canvas);
   const ctx = canvas.getContext("2d");
@@ -241,7 +317,10 @@ function render({ model, el }) {
   paint();
   const ratio = window.devicePixelRatio || 1;
   if (ratio !== model.get("ratio")) model.send({type: "ratio", ratio});
-  return () => { model.off("change:frame", paint); model.off("change:ratio", paint); };
+  return () => {
+    model.off("change:frame", paint); model.off("change:ratio", paint);
+    model.off("change:alt", describe); model.off("change:turnable", keyable); unwatch();
+  };
 }
 
 export default { render };
@@ -263,16 +342,25 @@ class FigureCanvas(anywidget.AnyWidget):
         The changing artists, packed by :func:`course_lib.widgets._scene.pack`.
     frame : int
         Counts the frames sent (shown by the page as the canvas' ``data-frame``).
+    alt : str
+        The figure's text alternative (the canvas is ``role="img"`` with it as ``aria-label``),
+        written from the figure's data by :func:`course_lib.plots.describe.alt_text`.
+    turnable : bool
+        The canvas takes the focus and sends its arrow keys to the kernel (a 3-D view, which
+        they turn).
     """
 
     _esm = _ESM
-    _css = ".course-figure { line-height: 0; }"
+    _css = (".course-figure { line-height: 0; }"
+            " .course-figure-canvas:focus-visible { outline: 3px solid #0072b2; }")
     width = traitlets.Int(0).tag(sync=True)
     height = traitlets.Int(0).tag(sync=True)
     ratio = traitlets.Float(1.0).tag(sync=True)
     background = traitlets.Bytes(b"").tag(sync=True)
     scene = traitlets.Bytes(b"").tag(sync=True)
     frame = traitlets.Int(0).tag(sync=True)
+    alt = traitlets.Unicode("").tag(sync=True)
+    turnable = traitlets.Bool(False).tag(sync=True)
 
     def show(self, *, scene: bytes, size: tuple[int, int], background: bytes | None = None):
         """Send one frame (and a new background, if given) in one message."""

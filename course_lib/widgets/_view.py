@@ -62,10 +62,12 @@ from matplotlib.legend import Legend
 from matplotlib.patches import Patch
 from matplotlib.layout_engine import PlaceHolderLayoutEngine
 
+from ..plots.describe import alt_text
 from ._scene import SceneRenderer, pack
 
 __all__ = ["Blitter", "ExplorerCanvas", "FairLock", "FigureExplorer", "FigureView", "KeptPictures",
-           "ScenePainter", "figure_lock", "one_at_a_time", "one_message_at_a_time", "readout_html",
+           "ScenePainter", "figure_lock", "mark_live_readouts", "one_at_a_time", "one_message_at_a_time",
+           "readout_html",
            "use_blitting"]
 
 
@@ -190,6 +192,24 @@ def one_message_at_a_time(layout, fig):
                 handle(msg)
 
         comm.on_msg(locked)
+    mark_live_readouts(layout)
+    return layout
+
+
+def mark_live_readouts(layout):
+    """Give the explorer's text readouts (its ``HTML`` and ``Label`` widgets; not the typeset
+    formulas, which a screen reader would spell out on every move) the class ``course-live``:
+    the figure canvas' page code makes them ``aria-live="polite"`` status regions, so a
+    screen reader announces what a control's move changed. Returns ``layout``."""
+    todo, seen = [layout], set()
+    while todo:
+        widget = todo.pop()
+        if id(widget) in seen:
+            continue
+        seen.add(id(widget))
+        todo.extend(getattr(widget, "children", ()))
+        if type(widget) in (W.HTML, W.Label):
+            widget.add_class("course-live")
     return layout
 
 
@@ -400,7 +420,10 @@ class ScenePainter(Blitter):
         self._ratio = 1.0                  # the page's pixels per CSS pixel, as last reported
         self._renderer = None
         self._kept = KeptPictures()          # each unchanged artist's recorded items
+        self._describing = None              # the scheduled rewrite of the text alternative
         canvas_widget.on_msg(self._on_msg)
+        # a 3-D view turns by dragging it, and by the arrow keys on the focused canvas
+        canvas_widget.turnable = any(ax.name == "3d" for ax in fig.axes)
 
     def _forget_pictures(self) -> None:
         self._kept.clear()
@@ -443,6 +466,26 @@ class ScenePainter(Blitter):
         width, height = (int(round(v)) for v in self.fig.bbox.size)
         self.widget.show(scene=pack(items, scene.clips, scene.height), size=(width, height),
                          background=self.background if new_background else None)
+        self._describe()
+
+    #: the canvas' text alternative is rewritten at most this long after a frame (s)
+    DESCRIBE_AFTER_S = 0.25
+
+    def _describe(self):
+        """Rewrite the canvas' text alternative (``alt``, its ``aria-label``) from the figure:
+        at once without an event loop (headless), else once, :attr:`DESCRIBE_AFTER_S` after
+        the frame, off the key-to-pixels path; the frames of a drag in between are not
+        described, the last one is."""
+        loop = _running_loop()
+        if loop is None:
+            self.widget.alt = alt_text(self.fig)
+        elif self._describing is None:
+            self._describing = loop.call_later(self.DESCRIBE_AFTER_S, self._describe_now)
+
+    def _describe_now(self):
+        with figure_lock(self.fig):
+            self._describing = None
+            self.widget.alt = alt_text(self.fig)
 
     # -- messages from the page -------------------------------------------------------------
     def _on_msg(self, _widget, content, _buffers):
@@ -452,6 +495,29 @@ class ScenePainter(Blitter):
             self._set_ratio(content.get("ratio"))
         elif content.get("type") == "mouse":
             self._mouse(content)
+        elif content.get("type") == "key":
+            self._turn(content)
+
+    #: degrees of a 3-D view's turn per arrow key (with Shift: three times as many)
+    TURN_DEG = 5.0
+
+    def _turn(self, content):
+        """An arrow key on the canvas: turn every 3-D axes of the figure (left/right: azimuth,
+        up/down: elevation, kept within +-90 degrees), what dragging the view does by mouse.
+        Other keys, and figures without a 3-D axes, are ignored."""
+        steps = {"ArrowLeft": (0, -1), "ArrowRight": (0, 1), "ArrowUp": (1, 0),
+                 "ArrowDown": (-1, 0)}
+        if content.get("key") not in steps:
+            return
+        de, da = (self.TURN_DEG * (3 if content.get("shift") else 1) * s
+                  for s in steps[content["key"]])
+        with figure_lock(self.fig):
+            axes = [ax for ax in self.fig.axes if ax.name == "3d"]
+            for ax in axes:
+                ax.view_init(elev=float(np.clip(ax.elev + de, -90.0, 90.0)),
+                             azim=(ax.azim + da + 180.0) % 360.0 - 180.0, roll=ax.roll)
+            if axes:
+                self.redraw()
 
     def _set_ratio(self, ratio):
         """The page's ``devicePixelRatio`` (0.5 to 4; anything else is ignored): the figure is

@@ -140,7 +140,8 @@ class ClippingExplorer:
         reach = max(4.0, float(np.ceil(np.max(np.abs(self.P)))))   # room for every vertex
         self.coord_sliders = [
             widgets.FloatSlider(min=lo_, max=reach, step=0.05,
-                                description=name, continuous_update=True, readout_format=".2f")
+                                description=name, continuous_update=True, readout_format=".2f",
+                                tooltip=f"{name} of the vertex chosen in 'move' (homogeneous)")
             for c, (name, lo_) in enumerate(zip(_COORDS, (-reach, -reach, -reach, -1.5)))]
         self.readout = widgets.HTML()
         self._sync_sliders()

@@ -32,6 +32,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from .. import shading
+from ..plots.describe import num, set_summary
 from ..plots.shading import sphere_pair, update_sphere_pair
 from ._view import FigureExplorer, one_at_a_time, readout_html
 from ..plotting import new_figure
@@ -213,6 +214,26 @@ class PhongExplorer(FigureExplorer):
             except ValueError:
                 self.probe_values[key] = None
         self.readout.value = self._readout_html(L, V)
+        set_summary(self.fig, self._summary())
+
+    def _summary(self) -> str:
+        """The figure in words (its text alternative's first sentences): the material, the
+        light and the viewer, where each model puts its highlight and the probe's colours."""
+        def where(peak):
+            return "no highlight" if peak is None else \
+                f"highlight at column {num(peak[1])}, row {num(peak[0])}"
+
+        def rgb(v):
+            return "hidden" if v is None else "(" + ", ".join(num(x) for x in v) + ")"
+
+        return (f"Two spheres of colour {self.colour.value}, ka {num(self.ka.value)}, "
+                f"kd {num(self.kd.value)}, ks {num(self.ks.value)}, n {num(self.n.value)}, lit "
+                f"from azimuth {num(self.light_azimuth.value)} degrees, elevation "
+                f"{num(self.light_elevation.value)} degrees, seen from azimuth "
+                f"{num(self.view_azimuth.value)}, elevation {num(self.view_elevation.value)}. "
+                f"Phong (left): {where(self.peaks[0])}, probe intensity "
+                f"{rgb(self.probe_values['phong'])}. Blinn-Phong (right): "
+                f"{where(self.peaks[1])}, probe intensity {rgb(self.probe_values['blinn'])}.")
 
     def _readout_html(self, L, V) -> str:
         def vec(v):

@@ -144,10 +144,13 @@ class SplineEndExplorer(FigureExplorer):
         self.rule = W.ToggleButtons(options=_RULE_OPTIONS, value=rule, description="end rule")
         self.point = W.Dropdown(options=self._point_options(rule), value=len(self.points) - 1,
                                 description="move")
+        # the tooltips name the sliders in full for a screen reader (and on hover)
         self.x = W.FloatSlider(description="x", min=self.limits[0, 0], max=self.limits[1, 0],
-                               step=0.01, continuous_update=True, readout_format=".2f")
+                               step=0.01, continuous_update=True, readout_format=".2f",
+                               tooltip="x of the point chosen in 'move'")
         self.y = W.FloatSlider(description="y", min=self.limits[0, 1], max=self.limits[1, 1],
-                               step=0.01, continuous_update=True, readout_format=".2f")
+                               step=0.01, continuous_update=True, readout_format=".2f",
+                               tooltip="y of the point chosen in 'move'")
         self.show_hull = W.Checkbox(value=True, description="B-spline convex hull")
         self.formulas = W.HTMLMath(layout=W.Layout(width="420px"))
         self.status = W.Label()

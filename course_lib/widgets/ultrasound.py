@@ -17,6 +17,7 @@ import numpy as np
 
 from .. import ultrasound as us
 from ..plots import ultrasound as uplots
+from ..plots.describe import set_summary
 from ._view import FigureView, one_at_a_time, one_message_at_a_time, readout_html
 
 
@@ -167,6 +168,8 @@ class BScanExplorer:
         outlines = uplots.displayed_outlines(phantom, self.speeds)
         for line, (xs, zs) in zip(self.shown_lines, outlines):
             line.set_data(xs, zs)
+        speeds = None if self.speeds is None else dict(self.speeds)   # as of this frame
+        set_summary(self.ax_img, lambda: uplots.bscan_summary(phantom, speeds))
         for line, xc in zip(self.a_lines, (self._gap_x(phantom), self._liver_x(phantom))):
             line.set_data(depth, self._aline(env, x, xc))
         self._view.redraw(self.fig)

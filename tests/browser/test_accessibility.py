@@ -1,0 +1,249 @@
+"""Every student can use the course: WCAG 2.1 AA in the notebooks and explorers, in Chromium.
+
+Each release notebook is opened in the student view (``python -m autograder lab --role
+student``: nbgrader's release, the students' JupyterLab extensions), Run All is chosen, and:
+
+* axe-core 4 (WCAG 2.0/2.1, levels A and AA) runs on the notebook's content ``.jp-Notebook``
+  (not JupyterLab's own menus and panels): no serious or critical violation, except the rules
+  named in :data:`EXCEPTIONS` with the reason;
+* every figure output is an image whose text alternative is written from its data (more than a
+  caption: at least :data:`MIN_ALT_WORDS` words and some numbers), and the explorer's canvas is
+  ``role="img"`` with such an ``aria-label``;
+* the explorer is driven by the keyboard only (Tab to a control, arrow keys): the figure
+  changes, its label follows, its readout is a live region; axe runs on the explorer after the
+  presses too.
+
+JupyterLab draws every cell here (``windowingMode: none``), so axe sees the whole notebook.
+The violations found are written to ``test-artifacts/browser/axe-<notebook>.json``.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import socket
+import time
+
+import pytest
+
+from a11y import counts, describe, run_axe, save, severe
+from autograder.course import nbgrader_env
+from labtools import running_lab
+from test_explorers_in_lab import FIGURE_CANVAS, _wait_idle, canvas_pixels, wait_for_change
+
+pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.xdist_group("browser")]
+
+NOTEBOOKS = ("q1_imaging", "q2_nuclear", "q3_marching_cubes", "q4_splines", "q5_phong",
+             "q6_clipping")
+#: what axe finds inside ``.jp-Notebook`` that is JupyterLab's own (4.x), not the course's, and
+#: that no setting of JupyterLab changes: ``(rule, the element's HTML, why)``. Each names the
+#: element, so the same rule on the course's own content still fails.
+EXCEPTIONS = (
+    ("aria-input-field-name", 'class="cm-content"',
+     "JupyterLab's cell editor (CodeMirror 6, role=textbox) has no accessible name"),
+    ("button-name", "jp-collapseHeadingButton",
+     "JupyterLab's collapse-heading button beside a heading cell is an empty <button>"),
+    ("aria-required-children", 'role="feed"',
+     "JupyterLab's notebook viewport is role=feed, its cells are not role=article"),
+    ("scrollable-region-focusable", "jp-MarkdownOutput",
+     "a markdown cell wider than the notebook (a wide table or equation) scrolls in a box "
+     "that JupyterLab does not make focusable"),
+)
+MIN_ALT_WORDS = 12
+
+
+def _port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def student_lab(tmp_path_factory, repo_root):
+    """The student view of the release (this checkout's ``course_lib``, so what is tested is
+    what is committed), every cell drawn."""
+    tmp = tmp_path_factory.mktemp("a11y-lab")
+    settings = tmp / "lab-settings" / "@jupyterlab"
+    (settings / "notebook-extension").mkdir(parents=True)
+    (settings / "notebook-extension" / "tracker.jupyterlab-settings").write_text(
+        json.dumps({"windowingMode": "none"}))
+    (settings / "apputils-extension").mkdir(parents=True)
+    (settings / "apputils-extension" / "notification.jupyterlab-settings").write_text(
+        json.dumps({"fetchNews": "false"}))
+    env = dict(nbgrader_env(), JUPYTERLAB_SETTINGS_DIR=str(tmp / "lab-settings"))
+    env.pop("MPLBACKEND", None)
+    args = ["--role", "student", "--course-root", str(tmp / "course")]
+    with running_lab(args, _port(), tmp / "lab.log", repo_root, env, "the student lab") as url:
+        yield url.split("/lab", 1)[0], url.split("?", 1)[1]
+
+
+@pytest.fixture(scope="module", params=NOTEBOOKS)
+def ran(request, browser, student_lab, artifacts):
+    """``(name, page)``: the release notebook ``name`` after Run All, its kernel idle."""
+    name = request.param
+    base, query = student_lab
+    context = browser.new_context(viewport={"width": 1400, "height": 1000})
+    page = context.new_page()
+    page.set_default_timeout(60_000)
+    try:
+        page.goto(f"{base}/lab/tree/tripos2006/{name}.ipynb?{query}&reset")
+        page.wait_for_selector(".jp-NotebookPanel .jp-Notebook .jp-Cell")
+        _wait_idle(page, 120)
+        page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
+        page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+        time.sleep(1.0)
+        _wait_idle(page, 600)
+        page.locator(FIGURE_CANVAS).first.wait_for(timeout=120_000)
+        _wait_idle(page, 120)
+        time.sleep(1.0)
+        yield name, page
+    finally:
+        sessions = page.request.get(f"{base}/api/sessions?{query}").json()
+        for s in sessions:
+            page.request.delete(f"{base}/api/sessions/{s['id']}?{query}")
+        context.close()
+
+
+def test_notebook_has_no_serious_violations(ran, artifacts):
+    name, page = ran
+    found = run_axe(page, ".jp-NotebookPanel .jp-Notebook")
+    save(artifacts / f"axe-{name}.json", found)
+    print(f"{name}: serious/critical", dict(counts(found)))
+    bad = severe(found, EXCEPTIONS)
+    assert not bad, f"{name}: axe found\n{describe(bad)}"
+
+
+def _alt_texts(page) -> list[tuple[str, str]]:
+    """``(kind, text)`` of every figure in the notebook's outputs: images and canvases."""
+    return page.evaluate("""() => {
+      const out = [];
+      for (const img of document.querySelectorAll('.jp-Notebook .jp-OutputArea-output img'))
+        out.push(['img', img.getAttribute('alt') || '']);
+      for (const c of document.querySelectorAll('.jp-Notebook canvas.course-figure-canvas')) {
+        const host = c.closest('[role=img]') || c;
+        out.push(['canvas', host.getAttribute('role') === 'img'
+                  ? (host.getAttribute('aria-label') || '') : '']);
+      }
+      return out;
+    }""")
+
+
+def test_every_figure_has_a_text_alternative_from_its_data(ran):
+    name, page = ran
+    figures = _alt_texts(page)
+    print(f"{name}: {sum(k == 'img' for k, _ in figures)} figures, "
+          f"{sum(k == 'canvas' for k, _ in figures)} explorer canvases")
+    assert any(kind == "img" for kind, _ in figures), f"{name}: no static figure drawn"
+    assert any(kind == "canvas" for kind, _ in figures), f"{name}: no explorer drawn"
+    thin = [(kind, text) for kind, text in figures
+            if len(text.split()) < MIN_ALT_WORDS or not re.search(r"\d", text)]
+    assert not thin, f"{name}: figures without a text alternative written from data: {thin}"
+
+
+def _explorer(page):
+    """The explorer's output area (marked ``data-a11y-explorer`` for axe), scrolled into view."""
+    out = page.locator(".jp-OutputArea-output").filter(has=page.locator(FIGURE_CANVAS)).first
+    out.wait_for(timeout=60_000)
+    out.evaluate("el => el.setAttribute('data-a11y-explorer', '')")
+    out.scroll_into_view_if_needed()
+    return out
+
+
+def _focused(page) -> dict:
+    return page.evaluate("""() => {
+      const el = document.activeElement;
+      const box = el && el.closest('[data-a11y-explorer]');
+      return {inside: !!box, role: el ? el.getAttribute('role') : null,
+              name: el ? (el.getAttribute('aria-label') || el.textContent || '').trim() : '',
+              now: el ? el.getAttribute('aria-valuenow') : null};
+    }""")
+
+
+def _tab_to_slider(page, out, limit=60) -> dict:
+    """From the explorer's first control, Tab until a slider has the focus; returns it."""
+    out.locator("button, select, input, [role=slider]").first.focus()
+    for _ in range(limit):
+        here = _focused(page)
+        assert here["inside"], f"Tab left the explorer before reaching a slider: {here}"
+        if here["role"] == "slider":
+            return here
+        page.keyboard.press("Tab")
+    raise AssertionError(f"no slider within {limit} Tab presses")
+
+
+def _label_changes(canvas, before: str, timeout_s: float = 20.0) -> bool:
+    """Whether the canvas' ``aria-label`` leaves ``before`` (the kernel rewrites it a moment
+    after the frame)."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if (canvas.get_attribute("aria-label") or "") != before:
+            return True
+        time.sleep(0.2)
+    return False
+
+
+def _tab_to_canvas(page, out, canvas, limit=60) -> bool:
+    """Focus the explorer's 3-D figure by keys: Tab on from its first control (a figure below
+    the controls), else Shift+Tab back from it (a figure before them)."""
+    on_canvas = "el => document.activeElement === el"
+    out.locator("button, select, input, [role=slider]").first.focus()
+    for _ in range(limit):
+        page.keyboard.press("Tab")
+        if canvas.evaluate(on_canvas):
+            return True
+        if not _focused(page)["inside"]:
+            break
+    out.locator("button, select, input, [role=slider]").first.focus()
+    page.keyboard.press("Shift+Tab")
+    return canvas.evaluate(on_canvas)
+
+
+def test_explorer_by_keyboard_only(ran, artifacts):
+    """Tab reaches a named slider, arrow keys move it and the figure and its text alternative
+    change; the readouts are live regions; Tab goes on out of the explorer (no trap)."""
+    name, page = ran
+    out = _explorer(page)
+    canvas = out.locator(FIGURE_CANVAS).first
+    label_before = canvas.get_attribute("aria-label") or ""
+    pixels_before = canvas_pixels(canvas)
+    slider = _tab_to_slider(page, out)
+    assert len(slider["name"]) >= 2, f"{name}: a slider without a name: {slider}"
+    for key in ("ArrowRight", "ArrowLeft"):
+        for _ in range(8):
+            page.keyboard.press(key)
+        if _focused(page)["now"] != slider["now"]:
+            break
+    moved = _focused(page)
+    assert moved["now"] != slider["now"], f"{name}: arrow keys did not move '{slider['name']}'"
+    frac = wait_for_change(canvas, pixels_before)
+    out.screenshot(path=str(artifacts / f"a11y-{name}-keys.png"))
+    assert frac >= 0.002, f"{name}: the figure did not change under the keys ({frac:.4f})"
+    assert _label_changes(canvas, label_before), \
+        f"{name}: the canvas' text alternative did not follow the figure"
+    assert out.locator("[aria-live=polite]").count() >= 1, f"{name}: no live readout"
+    if canvas.get_attribute("tabindex") == "0":   # a 3-D view: its arrow keys turn it
+        assert _tab_to_canvas(page, out, canvas), f"{name}: the keyboard never reaches the 3-D figure"
+        label, pixels = canvas.get_attribute("aria-label"), canvas_pixels(canvas)
+        for _ in range(3):
+            page.keyboard.press("ArrowRight")
+        assert wait_for_change(canvas, pixels) >= 0.002, f"{name}: the 3-D view did not turn"
+        assert _label_changes(canvas, label), f"{name}: the 3-D view's description did not turn"
+        assert re.search(r"azimuth -?[\d.]+ degrees", canvas.get_attribute("aria-label") or "")
+    for _ in range(80):                       # no focus trap: Tab leaves the explorer
+        page.keyboard.press("Tab")
+        if not _focused(page)["inside"]:
+            break
+    assert not _focused(page)["inside"], f"{name}: Tab never leaves the explorer"
+
+
+def test_explorer_has_no_serious_violations_after_keys(ran, artifacts):
+    name, page = ran
+    out = _explorer(page)
+    _tab_to_slider(page, out)
+    for key in ("ArrowRight", "ArrowRight", "ArrowLeft"):
+        page.keyboard.press(key)
+    time.sleep(1.0)
+    found = run_axe(page, "[data-a11y-explorer]")
+    save(artifacts / f"axe-{name}-explorer.json", found)
+    bad = severe(found)
+    assert not bad, f"{name} explorer: axe found\n{describe(bad)}"
