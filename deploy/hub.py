@@ -16,7 +16,8 @@ What ``up`` builds, under the state folder (default ``/srv/4f9-hub``, owned by r
   the formgrader and ``nbgrader collect`` use it;
 - ``etc/student``, ``etc/instructor``: the Jupyter config folders of the two (nbgrader's course
   id and exchange, the private submit, the collect that checks owners, links and times, the
-  formgrader's ``frame-ancestors``);
+  formgrader's ``frame-ancestors`` and the course's guard on its buttons,
+  :mod:`autograder.formgrader`);
 - ``exchange/``: nbgrader's exchange, root-owned with the sticky bit (so no student can rename or
   remove the course's folder, nbgrader #1225), its ``inbound`` owned by the grader account,
   sticky (no student removes another's submission), readable by the instructors' group through a
@@ -248,6 +249,12 @@ def write_jupyter_configs(s: HubSettings) -> None:
         "c = get_config()  # noqa: F821\n"
         "c.ServerApp.tornado_settings = {'headers': "
         "{'Content-Security-Policy': \"frame-ancestors 'self'\"}}\n")
+    # the Formgrader's buttons go through the course's guard (autograder/formgrader/), as in
+    # `make instructor`: the same server-extension switch, read by Jupyter from JSON config
+    from autograder.lab import server_config
+
+    (instructor / "jupyter_server_config.json").write_text(
+        json.dumps(server_config("instructor"), indent=1) + "\n")
 
 
 def prepare_exchange(s: HubSettings) -> Path:
