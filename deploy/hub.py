@@ -401,8 +401,9 @@ def _up(args) -> int:
     cmd, env = hub_command(s)
     print(f"\nThe course hub: http://{'localhost' if s.ip in ('127.0.0.1', '0.0.0.0') else s.ip}"
           f":{s.port}/  (formgrader: /services/{s.course_id}/)\n"
-          f"Add a student:     sudo {sys.executable} {__file__} --state {s.state} add-student NAME\n"
-          f"Add an instructor: sudo {sys.executable} {__file__} --state {s.state} add-instructor NAME"
+          f"As root (sudo from another account):\n"
+          f"  add a student:     {sys.executable} {__file__} --state {s.state} add-student NAME\n"
+          f"  add an instructor: {sys.executable} {__file__} --state {s.state} add-instructor NAME"
           " (then restart the hub)\nStop: Ctrl-C\n", flush=True)
     os.chdir(s.paths["hub_dir"])
     os.execve(cmd[0], cmd, env)
