@@ -25,7 +25,8 @@ What ``up`` builds, under the state folder (default ``/srv/4f9-hub``, owned by r
 - ``hub/``: JupyterHub's database, cookie secret and proxy pid (root only, 0700);
 - ``hub.json``: the settings ``deploy/jupyterhub_config.py`` reads.
 
-The hub itself runs as ``deploy/run_hub.py`` (JupyterHub, patient with the formgrader service).
+The hub itself runs as ``deploy/run_hub.py`` (JupyterHub, patient with the formgrader service,
+ended by Ctrl-C with one line).
 
 The course itself (``autograder``'s nbgrader course folder) lives in the grader account's home,
 ``/home/<grader>/course``, with ``exchange`` a link to the hub's exchange.
