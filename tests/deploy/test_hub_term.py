@@ -231,7 +231,10 @@ def _mark_in_the_formgrader(browser, course_hub) -> str:
     grader.get_by_role("link", name=ANA).first.click()
     grader.locator("textarea.comment").first.wait_for()
     submission = next(f for f in page.frames if "/formgrader/submissions/" in f.url)
-    submission.wait_for_function("() => window.formgrader && formgrader.grades.loaded "
+    # the page defines formgrader before its grades and comments: a predicate that throws
+    # fails the wait at once instead of retrying
+    submission.wait_for_function("() => window.formgrader && formgrader.grades "
+                                 "&& formgrader.grades.loaded && formgrader.comments "
                                  "&& formgrader.comments.loaded")
     for field, value, api in ((f"#{WRITTEN}-comment", COMMENT, "/api/comment/"),
                               (f"input.score#{WRITTEN}", f"{MARK:g}", "/api/grade/")):
