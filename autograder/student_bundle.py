@@ -340,10 +340,26 @@ python3 -m venv ~/4f9-env
 ~/4f9-env/bin/python -m pip install {wheel_name}
 ```
 
+## Fetch, submit, get feedback
+
+On the course's JupyterHub: the **Assignments** panel (Nbgrader → Assignment List) fetches
+`tripos2006`, submits it (as often as you like; the last submission before collection counts)
+and fetches your feedback. Off the hub, on the machine the course runs on, first copy the
+course's exchange settings (without them nbgrader stops with "Unwritable directory"); then the
+panel works, or the commands (`<repository>` is the course's folder your instructor names):
+
+```bash
+source ~/4f9-env/bin/activate
+mkdir -p ~/.jupyter && cp <repository>/course/for-students/nbgrader_config.py ~/.jupyter/
+nbgrader fetch_assignment tripos2006 --course 4f9    # -> ./tripos2006/
+nbgrader submit tripos2006 --course 4f9              # from the folder holding tripos2006/
+nbgrader fetch_feedback tripos2006 --course 4f9      # once your instructor hands feedback back
+```
+
 ## Work
 
 ```bash
-cd tripos2006          # the folder of notebooks you were given
+cd tripos2006          # the folder of notebooks you fetched or were given
 ~/4f9-env/bin/jupyter lab
 ```
 

@@ -16,7 +16,8 @@ What ``up`` builds, under the state folder (default ``/srv/4f9-hub``, owned by r
   the formgrader and ``nbgrader collect`` use it;
 - ``etc/student``, ``etc/instructor``: the Jupyter config folders of the two (nbgrader's course
   id and exchange, the private submit, the collect that checks owners, links and times, the
-  formgrader's ``frame-ancestors``);
+  formgrader's ``frame-ancestors`` and the course's guard on its buttons,
+  :mod:`autograder.formgrader`);
 - ``exchange/``: nbgrader's exchange, root-owned with the sticky bit (so no student can rename or
   remove the course's folder, nbgrader #1225), its ``inbound`` owned by the grader account,
   sticky (no student removes another's submission), readable by the instructors' group through a
@@ -24,7 +25,8 @@ What ``up`` builds, under the state folder (default ``/srv/4f9-hub``, owned by r
 - ``hub/``: JupyterHub's database, cookie secret and proxy pid (root only, 0700);
 - ``hub.json``: the settings ``deploy/jupyterhub_config.py`` reads.
 
-The hub itself runs as ``deploy/run_hub.py`` (JupyterHub, patient with the formgrader service).
+The hub itself runs as ``deploy/run_hub.py`` (JupyterHub, patient with the formgrader service,
+ended by Ctrl-C with one line).
 
 The course itself (``autograder``'s nbgrader course folder) lives in the grader account's home,
 ``/home/<grader>/course``, with ``exchange`` a link to the hub's exchange.
@@ -248,6 +250,12 @@ def write_jupyter_configs(s: HubSettings) -> None:
         "c = get_config()  # noqa: F821\n"
         "c.ServerApp.tornado_settings = {'headers': "
         "{'Content-Security-Policy': \"frame-ancestors 'self'\"}}\n")
+    # the Formgrader's buttons go through the course's guard (autograder/formgrader/), as in
+    # `make instructor`: the same server-extension switch, read by Jupyter from JSON config
+    from autograder.lab import server_config
+
+    (instructor / "jupyter_server_config.json").write_text(
+        json.dumps(server_config("instructor"), indent=1) + "\n")
 
 
 def prepare_exchange(s: HubSettings) -> Path:
@@ -394,8 +402,9 @@ def _up(args) -> int:
     cmd, env = hub_command(s)
     print(f"\nThe course hub: http://{'localhost' if s.ip in ('127.0.0.1', '0.0.0.0') else s.ip}"
           f":{s.port}/  (formgrader: /services/{s.course_id}/)\n"
-          f"Add a student:     sudo {sys.executable} {__file__} --state {s.state} add-student NAME\n"
-          f"Add an instructor: sudo {sys.executable} {__file__} --state {s.state} add-instructor NAME"
+          f"As root (sudo from another account):\n"
+          f"  add a student:     {sys.executable} {__file__} --state {s.state} add-student NAME\n"
+          f"  add an instructor: {sys.executable} {__file__} --state {s.state} add-instructor NAME"
           " (then restart the hub)\nStop: Ctrl-C\n", flush=True)
     os.chdir(s.paths["hub_dir"])
     os.execve(cmd[0], cmd, env)

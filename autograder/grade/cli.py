@@ -158,9 +158,9 @@ def main(args: argparse.Namespace) -> int:
     except ClusterUnavailable as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    written = _write_outputs(batch, sources, args)
-    if graded_as:
-        written.append(remedy.log(args.out, graded_as, args.reason, batch))
+    # the decisions are logged first: report.html shows them beside the "Own numbers" evidence
+    logged = [remedy.log(args.out, graded_as, args.reason, batch)] if graded_as else []
+    written = _write_outputs(batch, sources, args) + logged
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"graded {len(batch.students)} students, {len(batch.results)} cells in "
           f"{time.monotonic() - t0:.0f} s (grader peak memory {peak_mb:.0f} MB); wrote:\n"
@@ -185,7 +185,8 @@ def _write_outputs(batch, sources, args) -> list[str]:
     written.append(f"{out / 'feedback'}/<student>/<notebook>.html  ({len(pages)} feedback pages)")
     try:
         report.write_report(batch.results, sources, out / "report.html",
-                            references=reference_sources(batch.results), jobs=args.jobs)
+                            references=reference_sources(batch.results), jobs=args.jobs,
+                            graded_as=remedy.decisions(out, getattr(args, "graded_as_map", {})))
         written.append(f"{out / 'report.html'}  (histograms, failures, similar solutions)")
     except Exception as exc:  # noqa: BLE001 - the feedback is written; the gradebook follows
         traceback.print_exc(limit=3)

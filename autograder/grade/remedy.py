@@ -59,6 +59,11 @@ def ids_of(batch: Batch, graded_as: dict[str, str]) -> dict[tuple[str, str], dic
     return out
 
 
+def _one_line(text: str) -> str:
+    """``text`` on one line of the log (its fields are tab-separated, one decision a line)."""
+    return " ".join(str(text).split())
+
+
 def log(out: Path, graded_as: dict[str, str], reason: str, batch: Batch) -> str:
     """Append the decision and its evidence to ``OUT/graded-as.log``; the line to print."""
     path = Path(out) / LOG_NAME
@@ -68,9 +73,33 @@ def log(out: Path, graded_as: dict[str, str], reason: str, batch: Batch) -> str:
     for student, other in sorted(graded_as.items()):
         evidence = "; ".join(f"{nb} names {', '.join(v['named']) or 'no other id'}"
                              for (s, nb), v in sorted(named.items()) if s == student)
-        lines.append(f"{now}\tby {getpass.getuser()}\t{student} graded on the numbers and option "
-                     f"letters of {other}\treason: {reason.strip()}\tevidence: "
-                     f"{evidence or 'none found in the notebooks'}\n")
+        lines.append(f"{now}\tby {_one_line(getpass.getuser())}\t{student} graded on the "
+                     f"numbers and option letters of {other}\treason: {_one_line(reason)}\t"
+                     f"evidence: {_one_line(evidence) or 'none found in the notebooks'}\n")
     with open(path, "a", encoding="utf-8") as fh:
         fh.writelines(lines)
     return f"{path}  (the --graded-as decisions: {len(lines)} students, with reason and evidence)"
+
+
+_LINE = re.compile(r"^(?P<when>[^\t]*)\tby (?P<by>[^\t]*)\t(?P<student>[^\t]*) graded on the "
+                   r"numbers and option letters of (?P<graded_as>[^\t]*)\treason: "
+                   r"(?P<reason>[^\t]*)\tevidence: (?P<evidence>[^\t]*)$")
+
+
+def read_log(out: Path) -> list[dict]:
+    """The decisions in ``OUT/graded-as.log``, oldest first: ``{when, by, student, graded_as,
+    reason, evidence}`` each (a line that is not one of :func:`log`'s is skipped)."""
+    path = Path(out) / LOG_NAME
+    if not path.is_file():
+        return []
+    text = path.read_text(encoding="utf-8", errors="replace")
+    return [m.groupdict() for m in map(_LINE.match, text.splitlines()) if m]
+
+
+def decisions(out: Path, graded_as: dict[str, str]) -> list[dict]:
+    """For the report: each student's latest decision in ``OUT/graded-as.log``, with
+    ``applied``: whether this run graded the student on that id (a re-grade into the same
+    folder without ``--graded-as`` does not, and the instructor must see so)."""
+    latest = {d["student"]: d for d in read_log(out)}
+    return [dict(d, applied=graded_as.get(student) == d["graded_as"])
+            for student, d in sorted(latest.items())]

@@ -3,8 +3,9 @@
 The score distribution per question (inline SVG histograms), the most-failed tests (by how many
 students lost points, and how), the item analysis (:mod:`.items_html`), the submissions that
 could not be graded at all, similar solutions, answers that fit another student's own numbers
-(:mod:`.variants`), and a count of every status with its meaning. Unanswered cells count as lost
-points with their own status, never as grader failures.
+and the ``--graded-as`` decisions taken on them (:mod:`.variants`), and a count of every status
+with its meaning. Unanswered cells count as lost points with their own status, never as grader
+failures.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from .html import e, page, write_page
 from .items_html import STYLE as ITEMS_STYLE
 from .items_html import section_html as items_html
 from .similarity import find_pasted_references, find_similar, render_section
+from .variants import graded_as_html
 from .variants import section_html as own_numbers_html
 
 _STYLE = """
@@ -29,15 +31,18 @@ border-radius:.4em}
 
 
 def write_report(results: list[CellResult], sources: list[SourceNotebook], path: Path,
-                 references: Mapping[str, str] | None = None, jobs: int = 1) -> Path:
+                 references: Mapping[str, str] | None = None, jobs: int = 1,
+                 graded_as: list[dict] | None = None) -> Path:
     """Write the report of ``results`` to ``path``.
 
     ``references`` (``{graded name: course_lib reference source}``) lets the "Similar
-    solutions" section also flag cells that paste a reference; ``jobs`` processes fingerprint.
+    solutions" section also flag cells that paste a reference; ``jobs`` processes fingerprint;
+    ``graded_as``: the ``--graded-as`` decisions of the output folder
+    (:func:`autograder.grade.remedy.decisions`), shown after "Own numbers".
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    write_page(path, render(results, sources, references, jobs))
+    write_page(path, render(results, sources, references, jobs, graded_as))
     return path
 
 
@@ -100,7 +105,8 @@ def ungradeable(results: list[CellResult]) -> list[tuple[str, str, str, str]]:
 
 
 def render(results: list[CellResult], sources: list[SourceNotebook],
-           references: Mapping[str, str] | None = None, jobs: int = 1) -> str:
+           references: Mapping[str, str] | None = None, jobs: int = 1,
+           graded_as: list[dict] | None = None) -> str:
     """The report page."""
     students = sorted({r.student for r in results})
     body = ["<h1>tripos2006: grading report</h1>",
@@ -111,6 +117,7 @@ def render(results: list[CellResult], sources: list[SourceNotebook],
     body += [_items_section(results, sources)]
     body += _grader_errors_html(results) + _ungradeable_html(results)
     body += [similar_solutions_html(results, references, jobs), own_numbers_html(results)]
+    body += [graded_as_html(graded_as or [])]
     body += _statuses_html(results)
     return page("tripos2006: grading report", body, _STYLE + ITEMS_STYLE)
 

@@ -1,4 +1,5 @@
-"""The report's "Own numbers" section: answers that do not look like the student's own (issue 11).
+"""The report's "Own numbers" section: answers that do not look like the student's own (issue 11),
+and the ``--graded-as`` decisions taken on that evidence.
 
 Two signs, for the instructor only (the student's feedback never names other ids before the
 deadline):
@@ -58,3 +59,27 @@ def section_html(results: list[CellResult]) -> str:
                 f"<td><pre>{e_clipped(r.code, 400)}</pre></td></tr>" for r in computed[:LIMIT]]
         out.append("</table>")
     return "\n".join(out + ["</section>"])
+
+
+def graded_as_html(decisions: list[dict]) -> str:
+    """``<section>`` of the ``--graded-as`` decisions in ``OUT/graded-as.log``
+    (:func:`autograder.grade.remedy.decisions`): who was graded on which id, why, by whom,
+    when, on what evidence, and whether this run applied it. Empty when there are none."""
+    if not decisions:
+        return ""
+    dropped = [d for d in decisions if not d["applied"]]
+    out = ["<section class='graded-as'>",
+           f"<h2>Graded on another id ({len(decisions) - len(dropped)} in this run, from "
+           "<code>graded-as.log</code>)</h2>",
+           "<p class='note'>The instructor's decisions to judge a student's items on the numbers "
+           "and option letters of the id the notebook was worked for (<code>grade --graded-as "
+           "STUDENT=ID --reason ...</code>), latest per student. A decision this run did not "
+           "apply is marked: grading again into the same folder applies it only when "
+           "<code>--graded-as</code> is given again.</p>",
+           "<table><tr><th>student</th><th>graded on</th><th>reason</th><th>by</th>"
+           "<th>when (UTC)</th><th>evidence</th><th>this run</th></tr>"]
+    out += [f"<tr><td>{e(d['student'])}</td><td>{e(d['graded_as'])}</td><td>{e(d['reason'])}"
+            f"</td><td>{e(d['by'])}</td><td>{e(d['when'])}</td><td>{e_clipped(d['evidence'], 400)}"
+            f"</td><td>{'applied' if d['applied'] else 'NOT applied'}</td></tr>"
+            for d in decisions[:LIMIT]]
+    return "\n".join(out + ["</table>", "</section>"])

@@ -4,9 +4,10 @@ Two students log in (PAM), fetch ``tripos2006`` from the Assignments panel, answ
 browser (Ana: the right multiple-choice letter and a written answer; Ben: a wrong letter),
 validate and submit. The grader account collects (``nbgrader collect``), grades
 (``python -m autograder grade``), the instructor marks Ana's written answer in the Formgrader
-(the hub service ``/services/4f9/``), the grader hands back (``python -m autograder feedback``)
-and each student fetches feedback in the browser and reads their own marks. Ben can reach none
-of Ana's work: not through the filesystem as his own Unix user, not through the hub's URLs.
+(the hub service ``/services/4f9/``, whose Generate Feedback the course's guard refuses), the
+grader hands back (``python -m autograder feedback``) and each student fetches feedback in the
+browser and reads their own marks. Ben can reach none of Ana's work: not through the
+filesystem as his own Unix user, not through the hub's URLs.
 
 Oracles: the score of a multiple-choice item is the source notebook's points when the letter
 is the model answer's and 0 otherwise; the manual mark and comment are the ones typed here.
@@ -230,7 +231,10 @@ def _mark_in_the_formgrader(browser, course_hub) -> str:
     grader.get_by_role("link", name=ANA).first.click()
     grader.locator("textarea.comment").first.wait_for()
     submission = next(f for f in page.frames if "/formgrader/submissions/" in f.url)
-    submission.wait_for_function("() => window.formgrader && formgrader.grades.loaded "
+    # the page defines formgrader before its grades and comments: a predicate that throws
+    # fails the wait at once instead of retrying
+    submission.wait_for_function("() => window.formgrader && formgrader.grades "
+                                 "&& formgrader.grades.loaded && formgrader.comments "
                                  "&& formgrader.comments.loaded")
     for field, value, api in ((f"#{WRITTEN}-comment", COMMENT, "/api/comment/"),
                               (f"input.score#{WRITTEN}", f"{MARK:g}", "/api/grade/")):
@@ -239,7 +243,28 @@ def _mark_in_the_formgrader(browser, course_hub) -> str:
             grader.locator(field).fill(value)
             grader.locator(field).press("Tab")
     _shot(page, "06-instructor-marked")
-    return grader.locator("body").inner_text()
+    text = grader.locator("body").inner_text()
+    _check_the_guard(page, url, course_hub["log"])
+    return text
+
+
+def _check_the_guard(page, url: str, log: Path) -> None:
+    """The service loaded the course's guard: Manage Assignments' Generate Feedback (hidden by
+    the guard, clicked by script as a marker's script could) names the course's command and
+    does nothing."""
+    page.goto(f"{url}/services/4f9/formgrader/manage_assignments")
+    row = page.locator("tr", has=page.locator("td.name a", has_text=A))
+    row.wait_for()
+    button = row.locator("td.generate-feedback a").first
+    button.wait_for(state="attached")
+    assert button.is_hidden(), "the Generate Feedback button is shown"
+    button.dispatch_event("click")
+    modal = page.locator(".modal.in, .modal.show").last
+    modal.wait_for(state="visible", timeout=120_000)
+    said = modal.inner_text()
+    _shot(page, "06-instructor-generate-feedback-refused")
+    assert "python -m autograder feedback" in said and "Nothing was done" in said, said
+    assert "through the course's guard" in log.read_text(errors="replace")
 
 
 def _feedback_page(page, url: str, user: str) -> str:

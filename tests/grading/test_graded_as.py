@@ -5,17 +5,24 @@ and option letters typed), and handed it in as bob2. Graded as usual, the items 
 answer differs between the two ids are wrong (decided here with the registry's references for
 both ids, not by the grader), and the feedback page tells bob2 that the notebook names another
 id. Graded with ``--graded-as bob2=alice``, every item scores (the source's points), each says
-whose numbers judged it, and ``graded-as.log`` holds the decision, its reason and the evidence.
+whose numbers judged it, ``graded-as.log`` holds the decision, its reason and the evidence, and
+``report.html`` shows it after the "Own numbers" evidence.
 """
 
 from __future__ import annotations
 
+import datetime as dt
+import getpass
 import html
+import re
 
 import pytest
 
 from autograder.exercises import REGISTRY
+from autograder.grade import remedy
 from autograder.grade.remedy import LOG_NAME, parse_graded_as
+from autograder.model import Batch
+from autograder.outputs.variants import graded_as_html
 from gradingtools import read_grades, run_grade, write_nb
 from test_own_numbers import _differs, literal_version
 
@@ -27,6 +34,9 @@ def _items(src):
             if name in REGISTRY and REGISTRY[name].kind in ("choice", "value")]
 
 
+REASON = "typed a friend's id; worked alone (emails of 3 Dec)"
+
+
 @pytest.fixture(scope="module")
 def wrong_id(tmp_path_factory, sources):
     root = tmp_path_factory.mktemp("graded-as")
@@ -36,8 +46,7 @@ def wrong_id(tmp_path_factory, sources):
                  literal_version(src, "alice"), type_answers=False)
     run_grade(root / "submitted", root / "plain", "--no-gradebook")
     remedied = run_grade(root / "submitted", root / "remedied", "--no-gradebook",
-                         "--graded-as", "bob2=alice", "--reason", "typed a friend's id; "
-                         "worked alone (emails of 3 Dec)")
+                         "--graded-as", "bob2=alice", "--reason", REASON)
     return root, used, remedied
 
 
@@ -71,6 +80,47 @@ def test_graded_as_the_id_it_was_worked_for_every_item_scores(wrong_id):
     page = html.unescape((root / "remedied" / "feedback" / "bob2" / f"{used[0].name}.html")
                          .read_text(encoding="utf-8"))
     assert "Graded on the numbers and option letters of alice" in page
+
+
+def _cells(row: str) -> list[str]:
+    return [html.unescape(re.sub(r"<[^>]+>", "", c)) for c in re.findall(r"<td>(.*?)</td>", row)]
+
+
+def test_the_report_shows_the_decision_beside_the_own_numbers_evidence(wrong_id):
+    root, _, _ = wrong_id
+    report = (root / "remedied" / "report.html").read_text(encoding="utf-8")
+    logged = remedy.read_log(root / "remedied")
+    assert len(logged) == 1
+    start = report.index("<section class='graded-as'>")
+    section = report[start:report.index("</section>", start)]
+    assert report.index("<section class='own-numbers'>") < start
+    rows = re.findall(r"<tr><td>.*?</tr>", section, re.S)
+    assert len(rows) == 1
+    student, graded_on, reason, by, when, evidence, applied = _cells(rows[0])
+    assert (student, graded_on, reason, by) == ("bob2", "alice", REASON, getpass.getuser())
+    assert when == logged[0]["when"] and dt.datetime.fromisoformat(when).tzinfo is not None
+    assert "names alice" in evidence and applied == "applied"
+    # graded as usual, the report has no such section
+    assert "graded-as" not in (root / "plain" / "report.html").read_text(encoding="utf-8")
+
+
+def test_a_logged_decision_this_run_did_not_apply_is_marked(tmp_path):
+    """The log is appended across runs; the report shows each student's latest decision and
+    whether the run applied it (a re-grade without ``--graded-as`` does not)."""
+    empty = Batch(results=[], submissions={}, students=[])
+    remedy.log(tmp_path, {"bob2": "carol"}, "first\tthought", empty)
+    remedy.log(tmp_path, {"bob2": "alice", "dan": "erin"}, "typed a friend's id;\n\tworked alone",
+               empty)
+    assert len((tmp_path / LOG_NAME).read_text(encoding="utf-8").splitlines()) == 3
+    rows = remedy.decisions(tmp_path, {"bob2": "alice"})
+    assert [(d["student"], d["graded_as"], d["applied"]) for d in rows] == \
+        [("bob2", "alice", True), ("dan", "erin", False)]
+    assert rows[0]["reason"] == "typed a friend's id; worked alone"   # one line in the log
+    assert rows[0]["evidence"] == "none found in the notebooks"
+    assert [d["applied"] for d in remedy.decisions(tmp_path, {})] == [False, False]
+    page = graded_as_html(rows)
+    assert "(1 in this run" in page and page.count("NOT applied") == 1
+    assert graded_as_html([]) == "" and remedy.decisions(tmp_path / "none", {}) == []
 
 
 @pytest.mark.parametrize("pairs, reason, why", [
