@@ -25,7 +25,7 @@ from ..isolation.child import OFF_LIMITS
 from ..isolation.jobs import CHOICE, FUNCTION
 from ..model import (ASSIGNMENT, AnswerHint, AnswerShape, Batch, CaseOutcome, CaseRecord, CellKind,
                      CellResult, NameRun, OutcomeKind, SourceNotebook, Status, Submission, Verdict)
-from .cases import DrawnCase, case_seed, draw, notebook_digest
+from .cases import DrawnCase, case_seed, draw, job_digest
 from .executors import make_executor
 from .planning import MAX_CELL_CODE, NOT_TYPED, CellPlan, answer_hint, plan_cells, typed_answer
 from .progress import Progress
@@ -260,7 +260,7 @@ def _prepare_name(work: NotebookWork, name: str,
         drawn = []
         inputs = [CaseInput((), {}, 2**16)]
     else:
-        digest = notebook_digest(source for _label, source in work.plan.cells)
+        digest = job_digest(work.plan.cells)
         seed = case_seed(opts.secret, work.student, name, digest)
         drawn = draw(ex, seed)
         inputs = [CaseInput(tuple(d.case.args), dict(d.case.kwargs), d.result_cap)

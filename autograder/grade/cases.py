@@ -2,8 +2,8 @@
 
 Hidden cases come from a generator seeded with HMAC-SHA256 of the course secret over the
 assignment, the student, the graded name and a digest of ALL the student's solution code that
-runs for that notebook (:func:`notebook_digest`: every planned cell's exact text, comments and
-spacing included, since student code can read its own cells' text in the sandbox and a comment
+runs for that notebook (:func:`job_digest`: every planned cell's label and exact text, comments
+and spacing included, since student code can read its own cells' text in the sandbox and a comment
 could carry a table). Re-grading the same submission draws the same cases (same CSV,
 feedback, report); a change to ANY solution cell of the notebook (the graded function's, a
 helper's, a choice's) draws new hidden cases for every name, so a table of hidden inputs
@@ -45,6 +45,17 @@ def notebook_digest(sources) -> str:
     """SHA-256 over :func:`solution_digest` of every solution cell that runs, in order."""
     joined = "\n".join(solution_digest(code) for code in sources)
     return hashlib.sha256(joined.encode("ascii")).hexdigest()
+
+
+def job_digest(cells) -> str:
+    """:func:`notebook_digest` over everything of the student's that the sandbox receives:
+    each planned cell's label (its graded name and its place in the notebook) and its code.
+
+    A label reaches the student's code (in the job and as the code's file name), so a label
+    left out of the seed would let a resubmission with the same code but cells moved about
+    (empty cells in between) carry answers to hidden cases drawn the same as before.
+    """
+    return notebook_digest(part for label, code in cells for part in (label, code))
 
 
 def case_seed(secret: bytes, student: str, name: str, digest: str = "") -> int:

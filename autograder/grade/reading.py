@@ -22,6 +22,10 @@ MAX_NOTEBOOK_MB = 25.0
 #: Characters of code (all code cells together) a notebook may hold: an answer needs far less,
 #: and the grader's parser costs some 600 bytes of memory per character it reads.
 MAX_NOTEBOOK_CODE = 1_000_000
+#: Cells a notebook may hold: a released notebook has under a hundred; a few hundred empty cells
+#: cost nothing, but hundreds of thousands (still small on disk) would stall the whole batch
+#: while the grader reads and plans them, before any sandbox starts.
+MAX_CELLS = 2_000
 _LONE_SURROGATE = re.compile("[\ud800-\udfff]")
 _STUDENT_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._@+-]{0,127}$")
 
@@ -122,6 +126,9 @@ def _parse(data: bytes) -> dict:
                           "JupyterLab, save it (nbformat 4) and resubmit")
     if type(major) is not int or major > 4 or not isinstance(nb.get("cells"), list):
         raise _Unreadable("it is not a Jupyter notebook in format 4 (no list of cells)")
+    if len(nb["cells"]) > MAX_CELLS:
+        raise _Unreadable(f"it holds {len(nb['cells']):,} cells, far more than an answered notebook "
+                          f"needs (at most {MAX_CELLS:,}); delete the added cells and resubmit")
     return sanitise(nb) if re.search(r"\\u[dD][89a-fA-F]", text) else nb
 
 

@@ -50,6 +50,11 @@ CLONE_NEW = {"CLONE_NEWNS": 0x00020000, "CLONE_NEWCGROUP": 0x02000000,
 REFUSED = (
     # running or hiding code
     "execve", "execveat", "memfd_create", "memfd_secret", "shmat", "uselib",
+    # a code segment of the process's own (Docker's default profile refuses it too)
+    "modify_ldt",
+    # a new session would get a CPU share of its own from the scheduler's autogroups, so a job's
+    # processes could crowd out other students' jobs; the worker's own setsid comes first
+    "setsid",
     # the kernel keyrings (not namespaced: a key would outlive the job)
     "add_key", "keyctl", "request_key",
     # other processes' memory

@@ -14,7 +14,7 @@ source notebook and produce
 Everything the tests compare against is decided here, independently of the grader: the points
 come from the source notebook, the case counts from the registry with the grader's documented
 seed (:func:`autograder.grade.cases.case_seed` over the student, the name and the digest of ALL
-the student's solution cells that run, :func:`autograder.grade.cases.notebook_digest`).
+the student's solution cells that run, :func:`autograder.grade.cases.job_digest`).
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from autograder.exercises import REGISTRY
-from autograder.grade.cases import case_seed, notebook_digest
+from autograder.grade.cases import case_seed, job_digest
 from autograder.grade.planning import to_python
 from autograder.grade.sources import load_source
 
@@ -159,12 +159,18 @@ def solution_code(nb: dict, name: str) -> str:
     return to_python(_src_text(cells[-1]))[0] or ""
 
 
-def solution_codes(nb: dict) -> list[str]:
-    """Every solution code cell of ``nb`` (by its nbgrader metadata), in notebook order, as the
-    grader runs it: the cells whose digest seeds the hidden cases."""
-    codes = [to_python(_src_text(c))[0] for c in nb["cells"]
-             if c["cell_type"] == "code" and _meta(c).get("solution") and not _meta(c).get("grade")]
-    return [code for code in codes if code is not None]
+def planned_cells(nb: dict) -> list[tuple[str, str]]:
+    """``(label, code)`` of every solution code cell of ``nb`` (by its nbgrader metadata), in
+    notebook order, labelled as the grader labels them: what the sandbox receives and what
+    seeds the hidden cases (:func:`autograder.grade.cases.job_digest`)."""
+    cells = []
+    for i, c in enumerate(nb["cells"]):
+        meta = _meta(c)
+        if c["cell_type"] == "code" and meta.get("solution") and not meta.get("grade"):
+            code = to_python(_src_text(c))[0]
+            if code is not None:
+                cells.append((f"{meta.get('grade_id')} (cell {i + 1})", code))
+    return cells
 
 
 def cases_of(student: str, name: str, nb, secret: bytes = SECRET):
@@ -175,7 +181,7 @@ def cases_of(student: str, name: str, nb, secret: bytes = SECRET):
         return [None]
     if not isinstance(nb, dict):
         nb = json.loads(Path(nb).read_text(encoding="utf-8"))
-    seed = case_seed(secret, student, name, notebook_digest(solution_codes(nb)))
+    seed = case_seed(secret, student, name, job_digest(planned_cells(nb)))
     return ex.draw_cases(np.random.default_rng(seed))
 
 

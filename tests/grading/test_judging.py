@@ -181,3 +181,52 @@ def test_a_case_number_item_is_exact():
         assert judge(right + 1) is Verdict.WRONG_VALUE and judge(right - 1) is Verdict.WRONG_VALUE
         assert judge(right + 0.5) is Verdict.WRONG_VALUE
         assert judge(str(right)) is Verdict.WRONG_SHAPE and judge([right]) is Verdict.WRONG_SHAPE
+
+
+def test_hidden_seed_follows_where_the_solution_cells_stand(tmp_path):
+    """A cell's label (its graded name and its place in the notebook) reaches the sandbox, so it
+    seeds the hidden cases too: the same code with empty cells moved about, which could carry
+    answers into the sandbox in the labels, draws new cases (red team 11)."""
+    import json
+
+    from autograder.grade.cases import job_digest
+    from autograder.grade.planning import plan_cells
+    from autograder.grade.reading import read_submission
+    from gradingtools import course_sources, model_version, planned_cells
+
+    src = next(s for s in course_sources() if s.name == "q3_marching_cubes")
+    model = model_version(src)
+    moved = json.loads(json.dumps(model))
+    first = next(i for i, c in enumerate(moved["cells"])
+                 if (c.get("metadata", {}).get("nbgrader") or {}).get("solution"))
+    moved["cells"][first:first] = [{"cell_type": "raw", "metadata": {}, "source": ""}] * 3
+
+    def planned(nb, folder):
+        folder.mkdir()
+        (folder / f"{src.name}.ipynb").write_text(json.dumps(nb), encoding="utf-8")
+        return plan_cells(src, read_submission(folder, "kim", src.name)).cells
+
+    cells, cells_moved = planned(model, tmp_path / "a"), planned(moved, tmp_path / "b")
+    assert [code for _, code in cells] == [code for _, code in cells_moved]   # same code
+    assert job_digest(cells) != job_digest(cells_moved)
+    assert job_digest(cells) == job_digest(planned_cells(model))   # the bank seeds as the grader
+
+
+def test_a_notebook_of_countless_empty_cells_is_unreadable_at_once(tmp_path):
+    """700,000 empty cells are 22 MB on disk and no code, yet planning them held the whole batch
+    for minutes and a gigabyte (red team 11): such a notebook is refused as it is read."""
+    import json
+
+    from autograder.grade.reading import MAX_CELLS, read_submission
+    from autograder.model import Status
+
+    cells = [{"cell_type": "code", "metadata": {}, "source": "", "outputs": [],
+              "execution_count": None}] * (MAX_CELLS + 1)
+    nb = {"nbformat": 4, "nbformat_minor": 5, "metadata": {}, "cells": cells}
+    (tmp_path / "q5_phong.ipynb").write_text(json.dumps(nb), encoding="utf-8")
+    sub = read_submission(tmp_path, "kim", "q5_phong")
+    assert sub.status is Status.UNREADABLE
+    assert f"{MAX_CELLS + 1:,} cells" in sub.message and "delete the added cells" in sub.message
+    nb["cells"] = cells[:MAX_CELLS]
+    (tmp_path / "q5_phong.ipynb").write_text(json.dumps(nb), encoding="utf-8")
+    assert read_submission(tmp_path, "kim", "q5_phong").status is not Status.UNREADABLE
