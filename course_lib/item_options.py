@@ -80,9 +80,10 @@ OPTIONS = {
     'q2_item2': (
         'the height of each output pulse is proportional to the energy the gamma photon '
         'deposited',
-        'each event gives a short pulse, so the detector can count photons at a high rate',
-        'a thick, dense crystal stops most of the gamma photons that reach it: high '
-        'efficiency',
+        'the flash fades in about 0.25 microseconds and the tube responds in nanoseconds:'
+        ' it is fast',
+        'NaI(Tl) is dense, so a crystal about 1 cm thick stops most 140 keV photons: '
+        'high efficiency',
         'the tubes are small, so many more of them fit behind one crystal than '
         'solid-state photodiodes',
         'the tubes need no high-voltage supply, because the light itself frees all of the'

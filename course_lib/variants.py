@@ -168,10 +168,10 @@ def _dot(a, b) -> float:
     return sum(x * y for x, y in zip(a, b))
 
 
-# Q1(c): nominal speeds (m/s). The notebook says sound is slowest in fat, and ranks the tissues
-# by speed; a student's jittered speeds keep that ranking.
-_TISSUES = (("fat", 1450.0), ("water", 1480.0), ("kidney", 1560.0), ("liver", 1570.0),
-            ("blood", 1575.0), ("muscle", 1585.0))
+# Q1(c): the materials of the notebook's table (course_lib.ultrasound.MATERIALS) with its speeds
+# (m/s), slowest first: a student meets no tissue the notebook does not describe. The notebook
+# says sound is slowest in fat; a student's jittered speeds keep the table's ranking.
+_TISSUES = (("fat", 1450.0), ("water", 1482.0), ("liver", 1578.0))
 _RANK = {name: k for k, (name, _) in enumerate(_TISSUES)}
 #: Smallest gap (m/s) between a layer's speed and the scanner's 1540 m/s, and between the
 #: speeds of two layers: at 10 m/s the speed correction is 0.65 %, above the tolerance.
@@ -291,9 +291,17 @@ def _q3_marching_cubes(draw: _Draw) -> dict:
     return _until_sound(draw, _q3_draw, _q3_problems)
 
 
-#: Q4(c)(i): the spline kinds and end rules asked for. The B-spline with d = 2c - b is left
-#: out: it ends at (c, c - b, 0), which needs no arithmetic.
-_Q4_CASES = (("catmull-rom", "d=b"), ("catmull-rom", "d=2c-b"), ("b-spline", "d=b"))
+#: Q4(c)(i): the (spline kind, end rule) combinations whose end needs no arithmetic, and why:
+#: two of the three rows p(1), p'(1), p''(1) would be read off. Every other combination reads
+#: off at most one row (p(1) = c of any Catmull-Rom end; p'(1) = 0 of the B-spline with d = b).
+_Q4_TRIVIAL = {
+    ("b-spline", "d=2c-b"): "the B-spline with d = 2c - b ends at (c, c - b, 0)",
+    ("catmull-rom", "d=b"): "the Catmull-Rom with d = b ends at p(1) = c with p'(1) = 0",
+}
+#: Q4(c)(i): the spline kinds and end rules asked for: all but the trivial ones.
+_Q4_CASES = tuple(case for case in (("catmull-rom", "d=b"), ("catmull-rom", "d=2c-b"),
+                                    ("b-spline", "d=b"), ("b-spline", "d=2c-b"))
+                  if case not in _Q4_TRIVIAL)
 
 
 def _q4_draw(draw: _Draw) -> dict:
@@ -308,13 +316,14 @@ def _q4_draw(draw: _Draw) -> dict:
 
 def _q4_problems(v: dict) -> list[str]:
     """Q4(c)(i): three distinct points, not on one line (the end's acceleration is then never
-    zero and no two rules or kinds give the same end), and no trivial case."""
+    zero and no two rules or kinds give the same end), and not a trivial case
+    (:data:`_Q4_TRIVIAL`: two of the three rows read off without arithmetic)."""
     (ax, ay), (bx, by), (cx, cy) = v["a"], v["b"], v["c"]
     out = []
     if (bx - ax) * (cy - by) - (by - ay) * (cx - bx) == 0:
         out.append("a, b, c on one line")
-    if (v["kind"], v["rule"]) not in _Q4_CASES:
-        out.append("a case read off without arithmetic")
+    if (v["kind"], v["rule"]) in _Q4_TRIVIAL:
+        out.append(f"a case read off without arithmetic: {_Q4_TRIVIAL[v['kind'], v['rule']]}")
     return out
 
 

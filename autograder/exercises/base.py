@@ -115,6 +115,12 @@ class Exercise:
         """A value item's plain-data answer for ``student``'s numbers."""
         return to_plain(self.solve(variants.variant(self.notebook, student)))
 
+    @property
+    def compared_up_to(self) -> str | None:
+        """What the comparison rule ignores, completing "compared up to ..." (see
+        :func:`up_to`), or ``None`` for a rule that compares in order."""
+        return getattr(self.compare, "compared_up_to", None)
+
     def draw_cases(self, rng: np.random.Generator) -> list[Case]:
         """The exercise's cases drawn from ``rng`` (``cases`` may return any iterable, e.g. be a
         generator function), visible ones first."""
@@ -123,6 +129,16 @@ class Exercise:
     def expected(self, case: Case):
         """The reference's plain-data answer for ``case`` (only for ``raises is None``)."""
         return to_plain(self.reference(*case.args, **case.kwargs))
+
+
+def up_to(wording: str) -> Callable[[Callable], Callable]:
+    """Mark a comparison rule that ignores an order: ``wording`` completes "compared up to
+    ..." (e.g. "vertex and triangle order"). The feedback page prints it under the visible
+    cases, whose passed answers may list the same items in another order than the expected."""
+    def mark(rule: Callable) -> Callable:
+        rule.compared_up_to = wording
+        return rule
+    return mark
 
 
 #: The tolerance of every number item (issue 11), stated in each notebook: three significant

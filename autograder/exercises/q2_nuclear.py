@@ -14,7 +14,7 @@ import numpy as np
 
 from course_lib import gamma_camera
 
-from .base import Case, Exercise, close, wrong_shape, number_item
+from .base import Case, Exercise, close, number_item, up_to, wrong_shape
 
 NB = "q2_nuclear"
 _REL = close(rtol=1e-9, atol=1e-12)
@@ -104,7 +104,7 @@ def _same_points(tol=1e-9):
         return None
 
     rule.__doc__ = "the same set of points, in any order, within 1e-9 (relative)"
-    return rule
+    return up_to("the order of the points")(rule)
 
 
 def _ring_cases(rng):

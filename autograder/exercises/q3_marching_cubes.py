@@ -27,7 +27,7 @@ from course_lib import marching_cubes as mc
 from course_lib import mesh
 
 from .base import (Case, Exercise, Mismatch, close, describe, number_item, same_integer,
-                   wrong_shape)
+                   up_to, wrong_shape)
 
 NB = "q3_marching_cubes"
 
@@ -41,6 +41,8 @@ def _sorted_rows(a: np.ndarray, decimals: int = 6) -> np.ndarray:
     return a[np.lexsort(r.T[::-1])] if len(a) else a
 
 
+@up_to("vertex order, triangle order, the first vertex of each triangle and the winding of "
+       "the whole mesh")
 def same_mesh(expected, received, atol: float = 1e-6, rtol: float = 1e-6) -> str | None:
     """Meshes equal up to vertex order, face order, the start of each face and global winding.
 
@@ -127,6 +129,8 @@ def _case_of_answer() -> dict[bytes, int]:
             for i in range(256) if mc.ambiguous_faces(i)}
 
 
+@up_to("triangle order and the first edge of each triangle (any triangulation of the joined "
+       "contour passes)")
 def same_joined_patch(expected, received) -> str | None:
     """Any triangulation of the joined contour of the expected case, up to vertex order.
 

@@ -20,7 +20,7 @@ import numpy as np
 
 from course_lib import clipping
 
-from .base import Case, Exercise, close, describe, wrong_shape, number_item
+from .base import Case, Exercise, close, describe, number_item, up_to, wrong_shape
 
 #: The exam's triangles in homogeneous screen coordinates (see the module docstring).
 EXAM_A = np.array(clipping.EXAM_Q6["A"])
@@ -47,6 +47,7 @@ def _drop_repeats(U: np.ndarray, atol: float) -> np.ndarray:
     return U[keep]
 
 
+@up_to("the starting vertex and a positive scale of each homogeneous vertex")
 def same_polygon(expected, received, atol: float = 1e-7) -> str | None:
     """Homogeneous polygons equal up to a cyclic shift and a positive scale per vertex.
 

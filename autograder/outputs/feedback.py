@@ -27,6 +27,7 @@ import numpy as np
 
 from .. import explanations as explanation_cells
 from ..course import source_notebooks
+from ..exercises import REGISTRY
 from ..model import VERDICT_WORDS, CaseRecord, CellKind, CellResult, Status, Verdict
 from .html import e, e_clipped, page, plot_data, svg_lines, value_text, write_page
 from .safe_markdown import markdown2html
@@ -147,7 +148,7 @@ def _cell_html(r: CellResult, reveal: bool) -> str:
              f"</span> <small>{score} / {r.max_score:g}</small></h2>",
              f"<p class='msg'>{e(r.message)}</p>"]
     if r.kind is CellKind.FUNCTION and r.cases:
-        parts += _visible_html([c for c in r.cases if c.visible])
+        parts += _visible_html([c for c in r.cases if c.visible], _up_to(r.name))
         parts += _hidden_html([c for c in r.cases if not c.visible], reveal)
     elif (r.kind in (CellKind.CHOICE, CellKind.VALUE) and reveal and r.cases
           and r.cases[0].verdict is not Verdict.PASS):
@@ -227,12 +228,23 @@ def _explanation_html(r: CellResult, explanations: dict[str, list[str]] | None) 
             f"{markdown2html({}, text)}</details>")
 
 
-def _visible_html(visible: list[CaseRecord]) -> list[str]:
+def _up_to(name: str) -> str | None:
+    """What the graded name's comparison rule ignores (its registry entry's own wording)."""
+    exercise = REGISTRY.get(name)
+    return exercise.compared_up_to if exercise is not None else None
+
+
+def _visible_html(visible: list[CaseRecord], up_to: str | None = None) -> list[str]:
+    """The visible cases' table; under it, for a rule that ignores an order, what it ignores
+    (a passed answer may list the expected items in another order)."""
     if not visible:
         return []
     parts = ["<table><tr><th>visible case</th><th>input</th><th>expected</th>"
              "<th>your answer</th><th>result</th></tr>"]
     parts += [_case_row(c) for c in visible] + ["</table>"]
+    if up_to:
+        parts.append(f"<p class='note'>Your answer is compared with the expected one up to "
+                     f"{e(up_to)}.</p>")
     return parts + [_plot(c) for c in visible if c.verdict is not Verdict.PASS and _plottable(c)]
 
 

@@ -17,6 +17,11 @@ from ..model import ValueSummary
 PLOT_POINTS = 400
 #: Characters of a value's text.
 VALUE_CHARS = 2000
+#: Numeric arrays of more entries than this, or of 3 or more dimensions (a volume), are shown
+#: by shape, dtype, first entries and range: a 7 x 7 x 7 volume would fill the page.
+ARRAY_ENTRIES = 120
+#: First entries shown of such an array.
+ARRAY_HEAD = 6
 
 BASE_STYLE = """
 body{font-family:system-ui,-apple-system,Segoe UI,sans-serif;max-width:1000px;margin:2em auto;
@@ -60,12 +65,25 @@ def page(title: str, body: list[str], style: str = "") -> str:
     return "\n".join([head, *body, "</body></html>"])
 
 
+def _array_summary(v: np.ndarray) -> str:
+    """A large numeric array by its shape, dtype, first entries and range."""
+    head = np.array2string(v.reshape(-1)[:ARRAY_HEAD], precision=6, separator=", ")
+    finite = v[np.isfinite(v)] if v.dtype.kind == "f" else v.astype(float)
+    if not finite.size:
+        return f"array of shape {v.shape}, dtype {v.dtype}; first entries {head} …"
+    low, high = (f"{float(x):.6g}" for x in (finite.min(), finite.max()))
+    return f"array of shape {v.shape}, dtype {v.dtype}; first entries {head} …; from {low} to {high}"
+
+
 def value_text(v) -> str:
     """A plain value as short text: arrays by a few entries (and their shape), floats to 8
     significant digits, summaries of big arrays by shape, dtype and first entries."""
     if isinstance(v, ValueSummary):
         head = np.array2string(np.asarray(v.head).reshape(-1)[:8], precision=6, separator=", ")
         return f"array of shape {v.shape}, dtype {v.dtype}; first entries {head} …"
+    if (isinstance(v, np.ndarray) and v.dtype.kind in "biuf"
+            and (v.size > ARRAY_ENTRIES or (v.ndim >= 3 and v.size > ARRAY_HEAD))):
+        return _array_summary(v)
     if isinstance(v, np.ndarray):
         text = np.array2string(v, precision=6, threshold=60, edgeitems=4, max_line_width=70)
         return text if v.ndim <= 1 and v.size <= 60 else f"{text}\n(shape {v.shape})"

@@ -78,10 +78,10 @@ def test_q1_speeds_keep_the_table_order_and_the_mistakes_fail(numbers):
     c = np.array([v["speeds"] for v in rows])
     tissues = [v["tissues"] for v in rows]
     assert np.all(T > 0) and np.all(c > 0)
-    # the text: sound is slowest in fat, and the tissues are ranked water < kidney < liver <
-    # blood < muscle; no two layers share a speed
-    nominal = {"fat": 1450, "water": 1480, "kidney": 1560, "liver": 1570, "blood": 1575,
-               "muscle": 1585}
+    # only the materials of the notebook's table, ranked by its speeds (fat slowest); no two
+    # layers share a speed
+    nominal = {name: ultrasound.MATERIALS[name]["c"] for name in ("water", "fat", "liver")}
+    _assert_all([set(t) <= set(nominal) for t in tissues], "Q1(c) only the table's materials")
     order_kept = [all((nominal[a] < nominal[b]) == (ca < cb) for a, ca in zip(t, s)
                       for b, cb in zip(t, s) if a != b) for t, s in zip(tissues, c)]
     _assert_all(order_kept, "Q1(c) the speeds follow the table's order")
@@ -203,8 +203,8 @@ def test_q4ci_cases_need_arithmetic_and_the_mistakes_fail(numbers):
     cross = (b - a)[:, 0] * (c - b)[:, 1] - (b - a)[:, 1] * (c - b)[:, 0]
     _assert_all(cross != 0, "Q4(c)(i) a, b, c not on one line")
     _assert_all((kind != "b-spline") | (rule != "d=2c-b"), "Q4(c)(i) not the (c, c - b, 0) case")
-    assert set(zip(kind, rule)) == {("catmull-rom", "d=b"), ("catmull-rom", "d=2c-b"),
-                                    ("b-spline", "d=b")}
+    _assert_all((kind != "catmull-rom") | (rule != "d=b"), "Q4(c)(i) not the (c, 0, p'') case")
+    assert set(zip(kind, rule)) == {("catmull-rom", "d=2c-b"), ("b-spline", "d=b")}
     right = np.array([splines.end_derivatives(
         splines.catmull_rom_basis() if v["kind"] == "catmull-rom" else splines.bspline_basis(),
         *(np.array(v[k], float) for k in "abc"),
@@ -223,6 +223,15 @@ def test_q4ci_cases_need_arithmetic_and_the_mistakes_fail(numbers):
     for name, phantom in phantoms.items():
         wrong = _end(M, np.stack([a, b, c, phantom], axis=1))
         mistakes[f"the rule {name}"] = np.where((rule == name)[:, None, None], np.nan, wrong)
+    # the Catmull-Rom d = b reading: the end at c, at rest (p = c, p' = 0), p'' right
+    at_rest = right.copy()
+    at_rest[:, 0], at_rest[:, 1] = c, 0.0
+    mistakes["an end at c at rest, p(1) = c and p'(1) = 0"] = at_rest
+    # p'(1) = 0 alone is right only for the B-spline with d = b (where p(1) = (b + 2c) / 3 and
+    # p''(1) = 2 (b - c) still need the arithmetic): it fails every Catmull-Rom end
+    zero_velocity = right.copy()
+    zero_velocity[:, 1] = 0.0
+    mistakes["p'(1) = 0 for a Catmull-Rom end"] = np.where(is_cr, zero_velocity, np.nan)
     for what, wrong in mistakes.items():
         # NaN marks the student's own rule: no mistake to check there
         flags = _rejected_all("q4ci_your_end", right, np.nan_to_num(wrong, nan=1e9))

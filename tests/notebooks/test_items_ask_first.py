@@ -91,3 +91,38 @@ def test_feedback_shows_an_items_explanation_only_when_revealed():
     revealed = feedback.render("ab123", "q5_phong", [row], True, shown)
     assert "explanation of this item" not in hidden and "narrows the lobe" not in hidden
     assert "explanation of this item" in revealed and "narrows the lobe" in revealed
+
+
+_PROMISE = re.compile(r"explanation[^.]*\b(feedback|follows?)\b[^.]*\.", re.S)
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_a_promised_explanation_says_when_and_exists(path):
+    """A release sentence that promises an item's explanation says when it comes (with the
+    feedback after the due date: before it, the feedback shows none), and every choice item of
+    that part ("## " heading) has an explanation cell to show then. Cell 0 is the notebook's
+    own introduction, about the explanations in general."""
+    nb = read(path)
+    found = explanations.of_notebook(path)
+    part, promised = 0, {}
+    for i, cell in enumerate(nb.cells[1:], start=1):
+        if cell.cell_type == "markdown" and cell.source.lstrip().startswith("## "):
+            part = i
+        if cell.cell_type != "markdown" or explanations.is_explanation(cell):
+            continue
+        for sentence in _PROMISE.finditer(cell.source):
+            text = " ".join(sentence.group(0).split())
+            if "item" in text.lower() or "feedback" in text.lower():
+                assert "feedback after the due date" in text, f"{path.stem} cell {i}: {text!r}"
+                promised.setdefault(part, [])
+    items_by_part, part = {}, 0
+    for i, cell in enumerate(nb.cells[1:], start=1):
+        if cell.cell_type == "markdown" and cell.source.lstrip().startswith("## "):
+            part = i
+        gid = nbgrader_meta(cell).get("grade_id", "")
+        if gid in CHOICES:
+            items_by_part.setdefault(part, []).append(gid)
+    assert promised or path.stem == "q4_splines", f"{path.stem}: no promise found to check"
+    for part in promised:
+        missing = [name for name in items_by_part.get(part, []) if name not in found]
+        assert not missing, f"{path.stem}: {missing} promised an explanation but have none"
