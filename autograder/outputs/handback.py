@@ -33,6 +33,7 @@ from ..model import ASSIGNMENT, format_score
 from .feedback import with_marks
 from .gradebook import CARRIED_FILES
 from .html import e, page
+from .safe_markdown import comment_html
 
 MANIFEST = ".handback.json"
 _BODY = re.compile(r"<body>(.*)</body>", re.S)
@@ -102,11 +103,13 @@ def render(marks: NotebookMarks, grader_page: str | None) -> str:
         mark = (f"{format_score(round(m.score, 2))} / {format_score(m.max_score)}" if m.marked
                 else "not marked yet")
         rows.append(f"<tr><td>{e(m.grade_id)}{' (written answer)' if m.written else ''}</td>"
-                    f"<td>{e(mark)}</td><td class='comment'>{e(m.comment)}</td></tr>")
+                    f"<td>{e(mark)}</td><td class='comment'>{comment_html(m.comment)}</td></tr>")
     rows.append("</table>")
-    # a comment is prose: the page's font at full size, its line breaks kept (not a <pre>
-    # inside the table's smaller font, which rendered it at 0.8 of the text around it)
-    style = "td.comment{white-space:pre-wrap;word-break:break-word;font-size:1.1em}"
+    # a comment is prose, rendered as Markdown: the page's font at full size (not a <pre>
+    # inside the table's smaller font, which rendered it at 0.8 of the text around it), the
+    # marker's line breaks kept (comment_html leaves no newline between its blocks)
+    style = ("td.comment{white-space:pre-wrap;word-break:break-word;font-size:1.1em}"
+             "td.comment p{margin:0 0 .4em}td.comment p:last-child{margin:0}")
     body = ["<p class='note'>The automatic tests' results are not available.</p>"]
     if grader_page:
         written = {m.grade_id: (m.score, m.max_score, m.marked) for m in marks.marks
