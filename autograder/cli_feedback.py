@@ -20,6 +20,7 @@ from pathlib import Path
 
 from .course import DEFAULT_COURSE_ROOT, default_db_url
 from .outputs.gradebook_url import MissingDriver, resolve_db_url
+from .grade.sources import default_sources, load_source
 from .outputs import handback
 
 
@@ -74,7 +75,8 @@ def main(args: argparse.Namespace) -> int:
     except (MissingDriver, ValueError) as exc:
         print(f"error: --db-url: {exc}", file=sys.stderr)
         return 2
-    marks = handback.read_marks(db_url)
+    marks = handback.read_marks(db_url, handback.cell_order(
+        [load_source(p) for p in default_sources()]))
     waiting = unmarked(marks)
     say_unmarked(waiting, args.require_marked)
     if waiting and args.require_marked:

@@ -34,7 +34,7 @@ def course(tmp_path, monkeypatch):
 
 
 def _run(tmp_path, marks, monkeypatch, *extra):
-    monkeypatch.setattr(handback, "read_marks", lambda db_url: marks)
+    monkeypatch.setattr(handback, "read_marks", lambda db_url, order=None: marks)
     parser = argparse.ArgumentParser()
     cli_feedback.add_arguments(parser)
     return cli_feedback.main(parser.parse_args(["--grading", str(tmp_path / "grading"),

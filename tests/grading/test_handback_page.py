@@ -135,3 +135,56 @@ def test_a_script_in_a_comment_stays_inert():
         if tag == "img":
             assert attrs.get("src", "").startswith("data:image/png;base64,") or "src" not in attrs
     assert "<script>alert(1)" in text_of(cell)                   # shown as text, not run
+
+
+def test_the_check_your_id_note_comes_before_the_marks():
+    """The first thing a student reads on a notebook that names another id is that note."""
+    grader = feedback.render("ann", "q1_imaging", rows(), reveal_hidden=False,
+                             whose={"named": ["xy987"], "graded_as": ""})
+    page = handback.render(marks(4.5, True, "Good."), grader)
+    note = page.index("Check your student id: this notebook names xy987")
+    assert note < page.index("<table") and note < page.index("class='total'")
+    assert page.count("Check your student id") == 1
+    assert page.index("<h1>") < note
+
+
+class _Grade:
+    def __init__(self, name, cell_type):
+        self.name, self.score, self.max_score = name, 1.0, 2.0
+        self.auto_score = None if cell_type == "markdown" else 1.0
+        self.needs_manual_grade = False
+        self.cell = type("Cell", (), {"cell_type": cell_type})()
+
+
+def test_marks_are_listed_in_the_notebooks_order(sources, monkeypatch):
+    """The gradebook keeps no order (it was listed alphabetically): the oracle is the order of
+    the graded cells in the source notebook's file, read here with nbformat."""
+    import nbformat
+    import nbgrader.api
+
+    src = next(s for s in sources if s.manual and s.graded)
+    nb = nbformat.read(src.path, as_version=4)
+    graded = [(c.metadata["nbgrader"]["grade_id"], c.cell_type) for c in nb.cells
+              if c.metadata.get("nbgrader", {}).get("grade")]
+    assert [g for g, _ in graded] != sorted(g for g, _ in graded)   # the test can fail
+    notebook = type("Nb", (), {"name": src.name, "comments": [], "late_submission_penalty": 0,
+                               "grades": [_Grade(g, t) for g, t in sorted(graded)]})()
+    submission = type("Sub", (), {"student_id": "ann", "notebooks": [notebook]})()
+
+    class FakeGradebook:
+        def __init__(self, *a, **k):
+            pass
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def assignment_submissions(self, assignment):
+            return [submission]
+
+    monkeypatch.setattr(nbgrader.api, "Gradebook", FakeGradebook)
+    got = handback.read_marks("sqlite:///unused.db", handback.cell_order(sources))
+    assert [m.grade_id for m in got[0].marks] == [g for g, _ in graded]
+    assert [m.written for m in got[0].marks] == [t == "markdown" for _, t in graded]
