@@ -11,7 +11,7 @@ PORT   ?= 8888
 # make lab: the students' own environment (their wheel only, none of this repository's sources)
 STUDENT_VENV := .venv-student
 
-.PHONY: lab instructor test test-fast bench browser-deps a11y-deps sandbox-deps wheel-deps \
+.PHONY: setup lab instructor test test-fast bench browser-deps a11y-deps sandbox-deps wheel-deps \
         postgres-deps mathjax-deps hub hub-deps clean
 
 $(STAMP): pyproject.toml
@@ -19,6 +19,11 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test,postgres,cluster]'
 	@touch $(STAMP)
+
+## setup: create .venv and install everything the instructor's commands need (the course in
+## .venv; as root, Debian's bubblewrap, gcc and the Python headers, MathJax), starting no server
+setup: $(STAMP) sandbox-deps wheel-deps mathjax-deps
+	@echo "setup done: activate with '. .venv/bin/activate' (or run .venv/bin/python -m autograder ...)"
 
 ## lab: open the course in JupyterLab as a student: the released notebooks, run in
 ## $(STUDENT_VENV) with the students' compiled wheel (rebuilt and reinstalled when sources change)

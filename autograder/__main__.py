@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from pathlib import Path
 
 COMMANDS = {
     "release": ("autograder.release", "write the student versions of the assignment"),
@@ -45,5 +46,29 @@ def main(argv: list[str] | None = None) -> int:
     return int(args._main(args) or 0)
 
 
+def missing_package(exc: ModuleNotFoundError) -> str:
+    """What to do when a package the course installs is not importable: almost always this
+    Python is not the course's environment (``.venv``)."""
+    here = Path(__file__).resolve().parents[1]
+    venv = here / ".venv"
+    if Path(sys.prefix).resolve() == venv.resolve():
+        return (f"error: {exc}: the course's environment {venv} is incomplete; reinstall it "
+                "with `make setup`")
+    return (f"error: {exc}: this Python ({sys.executable}) is not the course's environment: "
+            f"activate .venv (. .venv/bin/activate) or run .venv/bin/python -m autograder ... "
+            f"from {here} (`make setup` creates .venv)")
+
+
+def run(argv: list[str] | None = None) -> int:
+    """:func:`main`, with a missing third-party package said in one line (exit status 2)."""
+    try:
+        return main(argv)
+    except ModuleNotFoundError as exc:
+        if (exc.name or "").split(".")[0] == "autograder":
+            raise
+        print(missing_package(exc), file=sys.stderr)
+        return 2
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run())

@@ -2,6 +2,7 @@
 
     python -m autograder export --out DIR [--course ROOT] [--db-url URL] [--decimals N]
                                 [--due ISO] [--late-per-day PERCENT] [--allow-unmarked]
+                                [--canvas-questions]
 
 Writes ``DIR/canvas.csv``, ``DIR/moodle.csv``, ``DIR/grades-long.csv`` and ``DIR/items.csv``
 (the item analysis of the final marks, written answers included) from nbgrader's gradebook
@@ -20,6 +21,7 @@ from .course import DEFAULT_COURSE_ROOT, default_db_url
 from .outputs.gradebook_url import MissingDriver, resolve_db_url
 from .exercises import REGISTRY
 from .grade.sources import default_sources, load_source
+from .model import ASSIGNMENT
 from .outputs import export
 
 #: Unmarked answers listed by name before "and N more".
@@ -39,6 +41,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "default: the assignment's due date in the gradebook, if any")
     add("--late-per-day", type=float, default=0.0, help="late penalty, percent of the "
         "assignment's marks per started day after the due date (default 0)")
+    add("--canvas-questions", action="store_true", help="canvas.csv: one column per question "
+        "(and the late penalty, negative) instead of the total alone")
     add("--allow-unmarked", action="store_true",
         help="export even while written answers are unmarked (they count 0)")
 
@@ -79,15 +83,33 @@ def main(args: argparse.Namespace) -> int:
             print("mark them in the Formgrader, or pass --allow-unmarked to count them as 0",
                   file=sys.stderr)
             return 1
+    if args.late_per_day > 0:
+        warn_without_due(export.without_due_date(rows, due), args.late_per_day)
     try:
         paths = export.write_all(rows, maxima, args.out, decimals=args.decimals,
-                                 late_per_day=args.late_per_day, due=due)
+                                 late_per_day=args.late_per_day, due=due,
+                                 canvas_questions=args.canvas_questions)
         paths.append(export.write_items(rows, cell_kinds(sources), args.out))
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     print("exported: " + ", ".join(str(p) for p in paths), file=sys.stderr)
     return 0
+
+
+def warn_without_due(students: list[str], late_per_day: float) -> None:
+    """Say loudly (stderr) that ``--late-per-day`` takes nothing from ``students``, and how to set
+    the due date."""
+    if not students:
+        return
+    shown = ", ".join(students[:LISTED]) + (f" and {len(students) - LISTED} more"
+                                            if len(students) > LISTED else "")
+    print(f"WARNING: --late-per-day {late_per_day:g} but no due date: neither --due nor the "
+          f"gradebook gives one, so NO late penalty is taken from {len(students)} students "
+          f"({shown}). Pass --due 2026-12-04T16:00 (UTC), or set the gradebook's due date in "
+          f"course/: nbgrader db assignment add {ASSIGNMENT} --duedate=2026-12-04T16:00 (or "
+          "the Formgrader's Manage Assignments: edit the assignment's due date)",
+          file=sys.stderr)
 
 
 def cell_kinds(sources) -> dict[tuple[str, str], str]:

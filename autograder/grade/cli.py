@@ -59,7 +59,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add("--reveal-hidden", action="store_true", help="after the deadline: show the failing "
         "hidden cases' inputs, expected and received values in the feedback")
     add("--secret-file", type=Path, default=None, help="the course secret that seeds the hidden "
-        "cases (default ~/.config/4f9/secret, created on first use)")
+        "cases (default ~/.config/4f9/secret, created on first use; not once the course has "
+        "grades, unless --new-secret)")
+    add("--new-secret", action="store_true", help="create a new course secret even though the "
+        "course already has grades (their hidden cases change on re-grade)")
     add("--source", type=Path, default=None,
         help="folder of the source notebooks (default: the course's notebooks/)")
     add("--load-timeout", type=float, default=None, help="seconds allowed for the setup and "
@@ -76,11 +79,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add("--unsafe-no-isolation", action="store_true", help="grade even when the operating-system "
         "sandbox is unavailable (student code then runs with your rights: never on real work)")
     add("--quiet", action="store_true", help="no progress bar")
-    add("--graded-as", action="append", default=[], metavar="STUDENT=ID",
+    add("--graded-as", action="append", default=[], metavar="STUDENT=ID[:REASON]",
         help="judge STUDENT's number items and option letters on ID's (the id the notebook was "
-        "worked for, after an honest wrong STUDENT_ID); needs --reason; logged in "
-        "OUT/graded-as.log (repeat for several students)")
-    add("--reason", default="", help="why --graded-as was decided (written to the log)")
+        "worked for, after an honest wrong STUDENT_ID); needs a reason (:REASON or --reason); "
+        "logged in OUT/graded-as.log and re-applied by every later grade into OUT; "
+        "STUDENT=STUDENT withdraws it (repeat for several students)")
+    add("--reason", default="", help="why --graded-as was decided, for those without their "
+        "own :REASON (written to the log)")
 
 
 def _mode(args) -> Mode | None:
@@ -112,6 +117,35 @@ def _options(args, secret: bytes, mode: Mode) -> Options:
                    graded_as=getattr(args, "graded_as_map", {}))
 
 
+def _decisions(args) -> tuple[dict[str, str], list[remedy.Decision]]:
+    """``{student: id}`` to judge on (the decisions standing in ``OUT/graded-as.log``,
+    updated by this run's ``--graded-as``) and the new decisions to log, each said."""
+    new = remedy.parse_graded_as(args.graded_as, args.reason, args.submitted)
+    applied, changes = remedy.merge(remedy.standing(args.out), new)
+    for d in changes:
+        if d.withdrawn:
+            print(d.describe(), file=sys.stderr)
+    for d in sorted(applied.values(), key=lambda d: d.student):
+        print(d.describe() + ("" if d in changes else f"  (from {args.out / remedy.LOG_NAME})"),
+              file=sys.stderr)
+    for s in sorted(set(new) - {d.student for d in changes}):
+        if new[s].withdrawn:
+            print(f"note: no --graded-as decision stands for {s}: nothing to withdraw",
+                  file=sys.stderr)
+    return {s: d.other for s, d in applied.items()}, changes
+
+
+def _graded(args) -> str:
+    """Where this course already has grades (``OUT/grades.csv``, a gradebook with
+    submissions), or ``""``: a missing secret is then not silently re-created."""
+    found = [str(args.out / "grades.csv")] if (args.out / "grades.csv").is_file() else []
+    if not args.no_gradebook:
+        db_url = args.db_url or default_db_url(gradebook.course_root(args.submitted, args.out))
+        if gradebook.submission_count(db_url):
+            found.append(f"the gradebook {db_url}")
+    return " and ".join(found)
+
+
 def _check_db_url(args) -> bool:
     """Resolve ``args.db_url`` (its driver named, :mod:`autograder.outputs.gradebook_url`);
     False, after saying why, when the gradebook could not be written."""
@@ -131,7 +165,7 @@ def main(args: argparse.Namespace) -> int:
         print(f"error: {args.submitted} is not a folder", file=sys.stderr)
         return 2
     try:
-        graded_as = remedy.parse_graded_as(args.graded_as, args.reason, args.submitted)
+        graded_as, changes = _decisions(args)
     except ValueError as exc:
         print(f"error: --graded-as: {exc}", file=sys.stderr)
         return 2
@@ -141,7 +175,7 @@ def main(args: argparse.Namespace) -> int:
         print("error: no source notebooks found", file=sys.stderr)
         return 2
     try:
-        secret = read_secret(args.secret_file)
+        secret = read_secret(args.secret_file, "" if args.new_secret else _graded(args))
     except (OSError, ValueError) as exc:
         print(f"error: cannot read the course secret: {exc}", file=sys.stderr)
         return 2
@@ -159,7 +193,7 @@ def main(args: argparse.Namespace) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     # the decisions are logged first: report.html shows them beside the "Own numbers" evidence
-    logged = [remedy.log(args.out, graded_as, args.reason, batch)] if graded_as else []
+    logged = [remedy.log(args.out, changes, batch)] if changes else []
     written = _write_outputs(batch, sources, args) + logged
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"graded {len(batch.students)} students, {len(batch.results)} cells in "

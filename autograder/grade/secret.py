@@ -10,18 +10,29 @@ from pathlib import Path
 DEFAULT_SECRET = Path("~/.config/4f9/secret").expanduser()
 
 
-def read_secret(path: Path | None) -> bytes:
+def read_secret(path: Path | None, graded: str = "") -> bytes:
     """The course secret at ``path`` (created at the default location on first use).
+
+    ``graded`` names the grades the course already has (empty: none). Then a missing default
+    secret is not created: a new one would draw other hidden cases than the grades were
+    judged on (a second instructor's login, a new machine), so the caller must bring the
+    secret over.
 
     Raises
     ------
     ValueError
-        When the file is empty.
+        When the file is empty, or missing while the course already has grades.
     OSError
         When it cannot be read.
     """
     if path is None:
         path = DEFAULT_SECRET
+        if not path.exists() and graded:
+            raise ValueError(
+                f"{path} does not exist, but this course already has grades ({graded}); a new "
+                "secret would draw other hidden cases. Copy the secret the course was graded "
+                f"with to {path} (e.g. scp otherhost:.config/4f9/secret {path}; chmod 600 "
+                f"{path}), or point --secret-file at it; --new-secret starts a new one anyway")
         if not path.exists():
             path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
             fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)

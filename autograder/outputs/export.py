@@ -3,8 +3,13 @@
 ``python -m autograder export`` reads the gradebook (after marking) and writes, into ``OUT``:
 
 - ``canvas.csv``: Canvas's gradebook import (Gradebook → Import): the columns ``Student``,
-  ``ID``, ``SIS User ID``, ``SIS Login ID``, ``Section``, then one column per question and the
-  total, one row per student;
+  ``ID``, ``SIS User ID``, ``SIS Login ID``, ``Section``, then the total (``tripos2006``), or
+  with ``canvas_questions`` one column per question (``tripos2006 q1_imaging`` …) and, where a
+  late penalty applies, ``tripos2006 late penalty`` (negative) instead, so that the columns
+  always add up to the total and importing every one never counts a mark twice. Canvas reads
+  a number in brackets after a column's name as the assignment's id, so no header carries one:
+  the maxima are in the ``Points Possible`` row under the header, as in Canvas's own export.
+  One row per student follows;
 - ``moodle.csv``: Moodle's "Import grades: CSV file": ``ID number``, ``First name``,
   ``Last name``, ``Email address``, one column per question, the late penalty and the total;
 - ``grades-long.csv``: the archive, one row per student, notebook and graded cell, with the
@@ -109,6 +114,14 @@ def late_penalty(row: StudentGrades, total_max: float, late_per_day: float,
     return min(sum(row.scores.values()), days * late_per_day / 100.0 * total_max)
 
 
+def without_due_date(rows: list[StudentGrades], due: dt.datetime | None) -> list[str]:
+    """The students who handed in but whom no due date applies to (no ``due`` given and none in
+    the gradebook): a late penalty cannot be taken from them."""
+    if due is not None:
+        return []
+    return [r.student for r in rows if r.timestamp is not None and r.due is None]
+
+
 #: places a score is first cleaned to, so that float noise from summing (13.249999999999998)
 #: does not decide which way a half goes
 _NOISE_PLACES = decimal.Decimal("1e-9")
@@ -136,7 +149,7 @@ def _naive_utc(when: dt.datetime | None) -> dt.datetime | None:
 
 def write_all(rows: list[StudentGrades], maxima: dict[str, float], out: Path, *,
               decimals: int = 1, late_per_day: float = 0.0,
-              due: dt.datetime | None = None) -> list[Path]:
+              due: dt.datetime | None = None, canvas_questions: bool = False) -> list[Path]:
     """Write ``canvas.csv``, ``moodle.csv`` and ``grades-long.csv``; returns their paths."""
     if decimals < 0:
         raise ValueError(f"decimals must be >= 0, got {decimals}")
@@ -144,25 +157,46 @@ def write_all(rows: list[StudentGrades], maxima: dict[str, float], out: Path, *,
     out.mkdir(parents=True, exist_ok=True)
     total_max = sum(maxima.values())
     fmt = lambda x: format_score(round_half_up(x, decimals))  # noqa: E731
-    canvas, moodle = [], []
+    late = late_per_day > 0
+    canvas_head, points = _canvas_columns(maxima, canvas_questions, late)
+    canvas, moodle = [points], []
     for r in rows:
         penalty = late_penalty(r, total_max, late_per_day, due)
         per_q = [fmt(r.scores[nb]) for nb in maxima]
         total = fmt(max(0.0, sum(r.scores.values()) - penalty))
         name = f"{r.last_name}, {r.first_name}".strip(", ") or r.student
-        canvas.append([name, r.lms_user_id, r.student, r.email, "", *per_q, total])
+        marks = [total] if not canvas_questions else per_q + ([fmt(0.0 - penalty)] if late else [])
+        canvas.append([name, r.lms_user_id, r.student, r.email, "", *marks])
         moodle.append([r.student, r.first_name, r.last_name, r.email, *per_q, fmt(penalty),
                        total])
     heads = [f"{nb} ({format_score(m)})" for nb, m in maxima.items()]
     paths = [out / "canvas.csv", out / "moodle.csv", out / "grades-long.csv"]
-    _write(paths[0], ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", *heads,
-                      f"{ASSIGNMENT} total ({format_score(total_max)})"], canvas)
+    _write(paths[0], canvas_head, canvas)
     _write(paths[1], ["ID number", "First name", "Last name", "Email address", *heads,
                       "Late penalty", f"{ASSIGNMENT} total"], moodle)
     long_cols = ["student", "notebook", "grade_id", "score", "max_score", "auto_score",
                  "manual_score", "extra_credit", "marked", "comment"]
     _write(paths[2], long_cols, [[c[k] for k in long_cols] for r in rows for c in r.cells])
     return paths
+
+
+#: The first cell of the row under the header that gives each column's maximum, as Canvas's
+#: own gradebook export writes it (and its import reads it).
+POINTS_POSSIBLE = "    Points Possible"
+
+
+def _canvas_columns(maxima: dict[str, float], questions: bool, late: bool
+                    ) -> tuple[list[str], list[str]]:
+    """The header of ``canvas.csv`` and its ``Points Possible`` row (see the module docstring):
+    the total alone, or the questions and, when ``late``, the late penalty (worth 0)."""
+    ids = ["Student", "ID", "SIS User ID", "SIS Login ID", "Section"]
+    if not questions:
+        return ([*ids, ASSIGNMENT],
+                [POINTS_POSSIBLE, "", "", "", "", format_score(sum(maxima.values()))])
+    names = [f"{ASSIGNMENT} {nb}" for nb in maxima] + ([f"{ASSIGNMENT} late penalty"]
+                                                       if late else [])
+    points = [format_score(m) for m in maxima.values()] + (["0"] if late else [])
+    return [*ids, *names], [POINTS_POSSIBLE, "", "", "", "", *points]
 
 
 def _write(path: Path, header: list[str], rows: list[list[str]]) -> None:

@@ -62,6 +62,27 @@ def course_root(submitted: Path, out: Path) -> Path:
     return Path(out).resolve()
 
 
+def submission_count(db_url: str) -> int:
+    """How many submissions of the assignment the gradebook at ``db_url`` holds; 0 when it
+    does not exist (a SQLite file is never created here) or cannot be read."""
+    if db_url.startswith("sqlite:///") and not Path(db_url[len("sqlite:///"):]).is_file():
+        return 0
+    try:
+        import sqlalchemy as sa
+
+        engine = sa.create_engine(db_url)
+        try:
+            with engine.connect() as conn:
+                if not sa.inspect(conn).has_table("submitted_assignment"):
+                    return 0
+                return int(conn.execute(sa.text(
+                    "SELECT COUNT(*) FROM submitted_assignment")).scalar() or 0)
+        finally:
+            engine.dispose()
+    except Exception:  # noqa: BLE001 - unreadable: the grading run reports it later
+        return 0
+
+
 def strip_hidden(source: str) -> str:
     """A test cell's source without its hidden tests (replaced by a one-line note)."""
     return _HIDDEN.sub(HIDDEN_NOTE, source)

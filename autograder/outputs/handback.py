@@ -33,10 +33,13 @@ from ..model import ASSIGNMENT, format_score
 from .feedback import with_marks
 from .gradebook import CARRIED_FILES
 from .html import e, page
+from .safe_markdown import comment_html
 
 MANIFEST = ".handback.json"
 _BODY = re.compile(r"<body>(.*)</body>", re.S)
 _STYLE_TAG = re.compile(r"<style>(.*?)</style>", re.S)
+#: the grader page's note on the id the notebook names (:func:`.feedback.whose_text`)
+_WHOSE = re.compile(r"<p class='whose'>[^<]*</p>")
 
 
 @dataclass
@@ -69,8 +72,18 @@ class NotebookMarks:
         return sum(m.max_score for m in self.marks)
 
 
-def read_marks(db_url: str) -> list[NotebookMarks]:
-    """Every submitted notebook of the assignment with its marks and comments."""
+def cell_order(sources) -> dict[tuple[str, str], int]:
+    """``{(notebook, grade_id): position}`` of every cell of the source notebooks: the order a
+    page lists a notebook's marks in (the gradebook keeps none)."""
+    return {(src.name, c.meta.get("grade_id")): i for src in sources
+            for i, c in enumerate(src.cells) if c.meta.get("grade_id")}
+
+
+def read_marks(db_url: str, order: dict[tuple[str, str], int] | None = None
+               ) -> list[NotebookMarks]:
+    """Every submitted notebook of the assignment with its marks and comments, each
+    notebook's marks in the order of ``order`` (:func:`cell_order`; by grade_id without)."""
+    order = order or {}
     from nbgrader.api import Gradebook
 
     out = []
@@ -82,7 +95,8 @@ def read_marks(db_url: str) -> list[NotebookMarks]:
                 marks = [Mark(g.name, float(g.score or 0.0), float(g.max_score or 0.0),
                               g.cell.cell_type == "markdown" or g.auto_score is None,
                               not g.needs_manual_grade, comments.get(g.name, ""))
-                         for g in sorted(nb.grades, key=lambda g: g.name)]
+                         for g in sorted(nb.grades, key=lambda g: (
+                             order.get((nb.name, g.name), len(order)), g.name))]
                 out.append(NotebookMarks(sub.student_id, nb.name, marks,
                                          float(nb.late_submission_penalty or 0.0)))
     return out
@@ -91,7 +105,10 @@ def read_marks(db_url: str) -> list[NotebookMarks]:
 def render(marks: NotebookMarks, grader_page: str | None) -> str:
     """The hand-back page: the marks and comments, then the grader's page of results."""
     done = all(m.marked for m in marks.marks)
+    # the note that the notebook names another id comes first: a student reads the top
+    whose = _WHOSE.search(grader_page or "")
     head = [f"<h1>{e(marks.notebook)}: feedback for {e(marks.student)}</h1>",
+            *([whose.group(0)] if whose else []),
             f"<p class='total'>Total <b>{format_score(round(marks.total, 2))} / "
             f"{format_score(marks.max_total)}</b>"
             + ("" if done else " (some written answers are not marked yet)") + "</p>"]
@@ -102,16 +119,18 @@ def render(marks: NotebookMarks, grader_page: str | None) -> str:
         mark = (f"{format_score(round(m.score, 2))} / {format_score(m.max_score)}" if m.marked
                 else "not marked yet")
         rows.append(f"<tr><td>{e(m.grade_id)}{' (written answer)' if m.written else ''}</td>"
-                    f"<td>{e(mark)}</td><td class='comment'>{e(m.comment)}</td></tr>")
+                    f"<td>{e(mark)}</td><td class='comment'>{comment_html(m.comment)}</td></tr>")
     rows.append("</table>")
-    # a comment is prose: the page's font at full size, its line breaks kept (not a <pre>
-    # inside the table's smaller font, which rendered it at 0.8 of the text around it)
-    style = "td.comment{white-space:pre-wrap;word-break:break-word;font-size:1.1em}"
+    # a comment is prose, rendered as Markdown: the page's font at full size (not a <pre>
+    # inside the table's smaller font, which rendered it at 0.8 of the text around it), the
+    # marker's line breaks kept (comment_html leaves no newline between its blocks)
+    style = ("td.comment{white-space:pre-wrap;word-break:break-word;font-size:1.1em}"
+             "td.comment p{margin:0 0 .4em}td.comment p:last-child{margin:0}")
     body = ["<p class='note'>The automatic tests' results are not available.</p>"]
     if grader_page:
         written = {m.grade_id: (m.score, m.max_score, m.marked) for m in marks.marks
                    if m.written}
-        found = _BODY.search(with_marks(grader_page, written))
+        found = _BODY.search(with_marks(_WHOSE.sub("", grader_page, count=1), written))
         style += "".join(_STYLE_TAG.findall(grader_page))
         body = ["<h2>Automatic tests, case by case</h2>", found.group(1) if found else ""]
     return page(f"{marks.notebook}: feedback for {marks.student}", head + rows + body, style)

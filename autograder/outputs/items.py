@@ -14,7 +14,8 @@ Every automatically graded cell (and, in ``export``, every written answer once m
 - **flag**: ``review`` when facility > 0.95 or < 0.2 or discrimination < 0.1.
 
 A row whose score is ``None`` is not an answer to its item: a notebook not handed in or
-unreadable as a whole, a grader error, a written answer not yet marked. It is left out of that
+unreadable as a whole, a notebook handed in wholly blank (every automatic cell ``unanswered``),
+a grader error, a written answer not yet marked. It is left out of that
 item's statistics and counts 0 in the student's rest score (as in their total). Cronbach's alpha
 (:func:`cronbach_alpha`) is here too; a choice item's options and the fairness of the variants
 are in :mod:`.item_checks`. Everything is NumPy and the standard library, and never NaN: an
@@ -95,21 +96,24 @@ class ScoreMatrix:
 
 def responses(results: Iterable[CellResult]) -> list[Response]:
     """The automatically graded cells of a grading run as responses: a notebook not handed in
-    or unreadable as a whole, and a grader error, are no answer to the item."""
+    or unreadable as a whole, one handed in wholly blank (every automatic cell ``unanswered``:
+    the student did not attempt it, like one not handed in), and a grader error, are no answer
+    to the item."""
+    auto = [r for r in results if (_KIND_NAMES.get(r.kind) or str(r.kind)) != "manual"]
+    attempted = {(r.student, r.notebook) for r in auto if r.status is not _UNANSWERED}
     out = []
-    for r in results:
-        kind = _KIND_NAMES.get(r.kind) or str(r.kind)
-        if kind == "manual":
-            continue
-        none = r.whole_notebook or r.status is _GRADER_ERROR or r.score is None
-        out.append(Response(r.student, r.notebook, r.grade_id, kind,
+    for r in auto:
+        none = (r.whole_notebook or r.status is _GRADER_ERROR or r.score is None
+                or (r.student, r.notebook) not in attempted)
+        out.append(Response(r.student, r.notebook, r.grade_id,
+                            _KIND_NAMES.get(r.kind) or str(r.kind),
                             None if none else float(r.score), float(r.max_score)))
     return out
 
 
 # looked up once: an enum member's ``.value`` costs a descriptor call per row
 _KIND_NAMES = {k: k.value for k in CellKind}
-_GRADER_ERROR = Status.GRADER_ERROR
+_GRADER_ERROR, _UNANSWERED = Status.GRADER_ERROR, Status.UNANSWERED
 
 
 def score_matrix(rows: Iterable[Response]) -> ScoreMatrix:

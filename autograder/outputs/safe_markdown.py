@@ -25,13 +25,16 @@ Two layers, both set up for the course by :func:`autograder.course.config_text`:
 
 from __future__ import annotations
 
+import base64
+import functools
 import html
+import io
 import re
 
 import bleach
 from jinja2 import pass_context
 
-__all__ = ["ALLOWED_TAGS", "clean_html", "markdown2html", "quoted_cell"]
+__all__ = ["ALLOWED_TAGS", "clean_html", "comment_html", "markdown2html", "quoted_cell"]
 
 #: HTML that nbconvert's markdown renderer produces for ordinary markdown, and nothing more
 ALLOWED_TAGS = frozenset({
@@ -125,6 +128,68 @@ def markdown2html(context, source: str) -> str:
         return (f"<p><em>This answer could not be shown as formatted text "
                 f"({html.escape(type(err).__name__)}); its source:</em></p>"
                 f"<pre>{html.escape(str(source))}</pre>")
+
+
+#: ``$$display$$`` or ``$inline$`` math in a marker's comment (a ``\\$`` is a dollar sign)
+_MATH = re.compile(r"(?<!\\)\$\$(.+?)(?<!\\)\$\$|(?<!\\)\$(?!\s)([^$\n]+?)(?<![\s\\])\$",
+                   re.DOTALL)
+#: longer TeX is shown as text (a comment's math is a symbol or a short formula)
+_MATH_CHARS = 400
+
+
+def comment_html(text: str) -> str:
+    """A marker's comment as the students' pages show it: Markdown (the Formgrader says
+    comments support Markdown and MathJax) through :func:`clean_html`, with each ``$...$`` or
+    ``$$...$$`` typeset by matplotlib's mathtext into a picture (the page is read offline,
+    without MathJax; TeX mathtext cannot typeset stays as text). Raw HTML is escaped as in
+    the Formgrader."""
+    from nbconvert.filters.markdown_mistune import IPythonRenderer, MarkdownWithMath
+
+    maths: list[str] = []
+
+    def hold(m: re.Match) -> str:
+        display = m.group(1) is not None
+        maths.append(_math_html(m.group(1) if display else m.group(2), display))
+        return f"MATHSPAN{len(maths) - 1}X"
+
+    source = _MATH.sub(hold, str(text))
+    renderer = IPythonRenderer(escape=False, allow_harmful_protocols=False,
+                               anchor_link_text="", exclude_anchor_links=True)
+    try:
+        rendered = clean_html(MarkdownWithMath(renderer=renderer).render(source))
+    except Exception:  # noqa: BLE001 - a comment that cannot be rendered is shown as text
+        rendered = f"<p>{html.escape(source)}</p>"
+    # the pictures are the course's own HTML, put in after cleaning; no newline is left
+    # between blocks, so a page may keep the newlines inside them (white-space: pre-wrap)
+    rendered = re.sub(r">\n+<", "><", rendered.strip())
+    return re.sub(r"MATHSPAN(\d+)X", lambda m: maths[int(m.group(1))]
+                  if int(m.group(1)) < len(maths) else m.group(0), rendered)
+
+
+def _math_html(tex: str, display: bool) -> str:
+    """``tex`` typeset as an inline (or display) picture, its TeX as the alt text; the TeX as
+    text when mathtext cannot typeset it."""
+    delim = "$$" if display else "$"
+    shown = html.escape(f"{delim}{tex}{delim}", quote=True)
+    png = _typeset(tex.strip()) if len(tex) <= _MATH_CHARS else None
+    if png is None:
+        return f"<code>{shown}</code>"
+    style = ("display:block;margin:.4em auto" if display
+             else "vertical-align:middle;max-height:3em")
+    return f'<img class="math" style="{style}" alt="{shown}" src="data:image/png;base64,{png}">'
+
+
+@functools.lru_cache(maxsize=512)
+def _typeset(tex: str) -> str | None:
+    """``$tex$`` as a base64 PNG by matplotlib's mathtext, or None when it cannot."""
+    from matplotlib import mathtext
+
+    buf = io.BytesIO()
+    try:
+        mathtext.math_to_image(f"${tex}$", buf, dpi=130, format="png")
+    except Exception:  # noqa: BLE001 - TeX beyond mathtext's subset: shown as text
+        return None
+    return base64.b64encode(buf.getvalue()).decode("ascii")
 
 
 def quoted_cell(cell: dict) -> dict:

@@ -15,12 +15,13 @@ import datetime as dt
 import getpass
 import html
 import re
+import shutil
 
 import pytest
 
 from autograder.exercises import REGISTRY
 from autograder.grade import remedy
-from autograder.grade.remedy import LOG_NAME, parse_graded_as
+from autograder.grade.remedy import LOG_NAME, Decision, merge, parse_graded_as, standing
 from autograder.model import Batch
 from autograder.outputs.variants import graded_as_html
 from gradingtools import read_grades, run_grade, write_nb
@@ -108,9 +109,9 @@ def test_a_logged_decision_this_run_did_not_apply_is_marked(tmp_path):
     """The log is appended across runs; the report shows each student's latest decision and
     whether the run applied it (a re-grade without ``--graded-as`` does not)."""
     empty = Batch(results=[], submissions={}, students=[])
-    remedy.log(tmp_path, {"bob2": "carol"}, "first\tthought", empty)
-    remedy.log(tmp_path, {"bob2": "alice", "dan": "erin"}, "typed a friend's id;\n\tworked alone",
-               empty)
+    remedy.log(tmp_path, [Decision("bob2", "carol", "first\tthought")], empty)
+    why = "typed a friend's id;\n\tworked alone"
+    remedy.log(tmp_path, [Decision("bob2", "alice", why), Decision("dan", "erin", why)], empty)
     assert len((tmp_path / LOG_NAME).read_text(encoding="utf-8").splitlines()) == 3
     rows = remedy.decisions(tmp_path, {"bob2": "alice"})
     assert [(d["student"], d["graded_as"], d["applied"]) for d in rows] == \
@@ -125,7 +126,7 @@ def test_a_logged_decision_this_run_did_not_apply_is_marked(tmp_path):
 
 @pytest.mark.parametrize("pairs, reason, why", [
     (["bob2=alice"], "", "--reason"),
-    (["bob2=bob2"], "r", "same id twice"),
+    (["bob2=alice:  "], "", "--reason"),
     (["bob2"], "r", "is not STUDENT=ID"),
     (["bob2=alice", "bob2=carol"], "r", "two ids"),
     (["nobody=alice"], "r", "no submission of nobody"),
@@ -135,3 +136,60 @@ def test_graded_as_refuses_what_it_cannot_log_clearly(tmp_path, pairs, reason, w
     (tmp_path / "bob2" / "tripos2006").mkdir(parents=True)
     with pytest.raises(ValueError, match=why):
         parse_graded_as(pairs, reason, tmp_path)
+
+
+def test_each_decision_has_its_own_reason_and_a_withdrawal_is_a_decision(tmp_path):
+    for s in ("bob2", "carol"):
+        (tmp_path / s / "tripos2006").mkdir(parents=True)
+    got = parse_graded_as(["bob2=alice:typed alice's id", "carol=carol"], "withdrawn: wrong",
+                          tmp_path)
+    assert (got["bob2"].other, got["bob2"].reason) == ("alice", "typed alice's id")
+    assert got["carol"].withdrawn and got["carol"].reason == "withdrawn: wrong"
+
+
+def test_the_log_is_read_back_latest_line_per_student_withdrawals_end_a_decision(tmp_path):
+    (tmp_path / LOG_NAME).write_text(
+        "2026-12-01T10:00:00+00:00\tby ann\tbob2 graded on the numbers and option letters of "
+        "alice\treason: slip\tevidence: q1 names alice\n"
+        "2026-12-01T10:00:00+00:00\tby ann\tcarol graded on the numbers and option letters of "
+        "dan\treason: slip too\tevidence: none\n"
+        "not a decision line\n"
+        "2026-12-02T09:00:00+00:00\tby tom\tcarol withdrawn: graded on its own id again\t"
+        "reason: carol worked her own id after all\tevidence: none\n", encoding="utf-8")
+    now = standing(tmp_path)
+    assert list(now) == ["bob2"]
+    assert (now["bob2"].other, now["bob2"].by, now["bob2"].when) == (
+        "alice", "ann", "2026-12-01T10:00:00+00:00")
+    assert now["bob2"].describe() == ("graded bob2 as alice, decided 2026-12-01T10:00:00+00:00 "
+                                      "by ann: slip")
+    (tmp_path / "bob2" / "tripos2006").mkdir(parents=True)
+    same = parse_graded_as(["bob2=alice"], "again", tmp_path)
+    applied, changes = merge(now, same)
+    assert changes == [] and applied == now             # the same decision is not logged twice
+    applied, changes = merge(now, parse_graded_as(["bob2=bob2"], "undo", tmp_path))
+    assert applied == {} and [d.student for d in changes] == ["bob2"]
+
+
+def test_a_decision_stands_on_every_later_grade_until_withdrawn(wrong_id):
+    root, used, _ = wrong_id
+    again = root / "again"
+    again.mkdir()
+    shutil.copy(root / "remedied" / LOG_NAME, again / LOG_NAME)
+    run = run_grade(root / "submitted", again, "--no-gradebook")        # no --graded-as
+    assert "graded bob2 as alice, decided 20" in run.stderr
+    assert "typed a friend's id; worked alone (emails of 3 Dec)" in run.stderr
+    rows = read_grades(again)
+    for src in used:
+        for _name, tid, points in _items(src):
+            assert float(rows[("bob2", src.name, tid)]["score"]) == pytest.approx(points, abs=1e-9)
+    run_grade(root / "submitted", again, "--no-gradebook", "--graded-as",
+              "bob2=bob2:on reflection not a slip")
+    log = (again / LOG_NAME).read_text(encoding="utf-8")
+    assert "bob2 withdrawn: graded on its own id again\treason: on reflection not a slip" in log
+    rows, plain = read_grades(again), read_grades(root / "plain")
+    for src in used:
+        for _name, tid, _ in _items(src):
+            key = ("bob2", src.name, tid)
+            assert (rows[key]["status"], rows[key]["score"]) == (plain[key]["status"],
+                                                                 plain[key]["score"])
+    assert standing(again) == {}

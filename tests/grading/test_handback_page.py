@@ -8,6 +8,7 @@ test gave (4.5 of 6), and the words a page must not use about a marked answer.
 
 from __future__ import annotations
 
+import base64
 import re
 from html.parser import HTMLParser
 
@@ -81,6 +82,109 @@ def test_a_blank_written_answer_keeps_its_zero_and_reason():
 def test_a_comment_is_prose_at_the_pages_size():
     """Not a <pre> in the table's smaller font; its line breaks kept; escaped."""
     grader = feedback.render("ann", "q1_imaging", rows(), reveal_hidden=False)
-    page = handback.render(marks(4.5, True, "Line one <b>\nline two."), grader)
-    assert "<td class='comment'>Line one &lt;b&gt;\nline two.</td>" in page
+    page = handback.render(marks(4.5, True, "Line one <blink>\nline two."), grader)
+    assert "<td class='comment'><p>Line one &lt;blink&gt;\nline two.</p></td>" in page
     assert re.search(r"td\.comment\{white-space:pre-wrap;[^}]*font-size:1\.1em", page)
+
+
+class _Tags(HTMLParser):
+    """Every start tag with its attributes, as a browser would build them."""
+
+    def __init__(self):
+        super().__init__(convert_charrefs=True)
+        self.tags: list[tuple[str, dict]] = []
+
+    def handle_starttag(self, tag, attrs):
+        self.tags.append((tag, dict(attrs)))
+
+
+def _comment_cell(page: str) -> str:
+    return re.search(r"<td class='comment'>(.*?)</td>", page, re.DOTALL).group(1)
+
+
+def test_a_comment_is_rendered_as_markdown_with_its_maths_typeset():
+    """The Formgrader tells markers comments support Markdown and MathJax: the page shows
+    them so (bold as bold, ``$\\mu$`` as a typeset picture whose alt text is the TeX)."""
+    grader = feedback.render("ann", "q1_imaging", rows(), reveal_hidden=False)
+    page = handback.render(marks(4.5, True, "**Good**: use $\\mu$ in\n\n$$I = I_0 e^{-\\mu x}$$"),
+                           grader)
+    cell = _comment_cell(page)
+    assert "<strong>Good</strong>" in cell and "**" not in cell
+    parser = _Tags()
+    parser.feed(cell)
+    pictures = [a for t, a in parser.tags if t == "img"]
+    assert [p["alt"] for p in pictures] == ["$\\mu$", "$$I = I_0 e^{-\\mu x}$$"]
+    for p in pictures:
+        assert p["src"].startswith("data:image/png;base64,")
+        png = base64.b64decode(p["src"].split(",", 1)[1])
+        assert png[:8] == b"\x89PNG\r\n\x1a\n"         # a real picture, not text
+    assert "use" in text_of(cell) and "$" not in text_of(cell)
+
+
+def test_a_script_in_a_comment_stays_inert():
+    payload = ('<script>alert(1)</script><img src=x onerror="alert(2)">'
+               '[x](javascript:alert(3)) $\\" onerror="alert(4)$ <style>body{display:none}</style>')
+    grader = feedback.render("ann", "q1_imaging", rows(), reveal_hidden=False)
+    cell = _comment_cell(handback.render(marks(4.5, True, payload), grader))
+    parser = _Tags()
+    parser.feed(cell)
+    for tag, attrs in parser.tags:
+        assert tag not in ("script", "style"), cell
+        assert not any(k.startswith("on") for k in attrs), (tag, attrs)
+        assert not any("javascript:" in (v or "") for v in attrs.values()), (tag, attrs)
+        if tag == "img":
+            assert attrs.get("src", "").startswith("data:image/png;base64,") or "src" not in attrs
+    assert "<script>alert(1)" in text_of(cell)                   # shown as text, not run
+
+
+def test_the_check_your_id_note_comes_before_the_marks():
+    """The first thing a student reads on a notebook that names another id is that note."""
+    grader = feedback.render("ann", "q1_imaging", rows(), reveal_hidden=False,
+                             whose={"named": ["xy987"], "graded_as": ""})
+    page = handback.render(marks(4.5, True, "Good."), grader)
+    note = page.index("Check your student id: this notebook names xy987")
+    assert note < page.index("<table") and note < page.index("class='total'")
+    assert page.count("Check your student id") == 1
+    assert page.index("<h1>") < note
+
+
+class _Grade:
+    def __init__(self, name, cell_type):
+        self.name, self.score, self.max_score = name, 1.0, 2.0
+        self.auto_score = None if cell_type == "markdown" else 1.0
+        self.needs_manual_grade = False
+        self.cell = type("Cell", (), {"cell_type": cell_type})()
+
+
+def test_marks_are_listed_in_the_notebooks_order(sources, monkeypatch):
+    """The gradebook keeps no order (it was listed alphabetically): the oracle is the order of
+    the graded cells in the source notebook's file, read here with nbformat."""
+    import nbformat
+    import nbgrader.api
+
+    src = next(s for s in sources if s.manual and s.graded)
+    nb = nbformat.read(src.path, as_version=4)
+    graded = [(c.metadata["nbgrader"]["grade_id"], c.cell_type) for c in nb.cells
+              if c.metadata.get("nbgrader", {}).get("grade")]
+    assert [g for g, _ in graded] != sorted(g for g, _ in graded)   # the test can fail
+    notebook = type("Nb", (), {"name": src.name, "comments": [], "late_submission_penalty": 0,
+                               "grades": [_Grade(g, t) for g, t in sorted(graded)]})()
+    submission = type("Sub", (), {"student_id": "ann", "notebooks": [notebook]})()
+
+    class FakeGradebook:
+        def __init__(self, *a, **k):
+            pass
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def assignment_submissions(self, assignment):
+            return [submission]
+
+    monkeypatch.setattr(nbgrader.api, "Gradebook", FakeGradebook)
+    got = handback.read_marks("sqlite:///unused.db", handback.cell_order(sources))
+    assert [m.grade_id for m in got[0].marks] == [g for g, _ in graded]
+    assert [m.written for m in got[0].marks] == [t == "markdown" for _, t in graded]

@@ -263,6 +263,40 @@ def test_a_missing_notebook_is_no_answer_to_its_items(klass):
             empty["test_strong"].discrimination, empty["test_strong"].flag) == (0, None, None, "")
 
 
+def test_a_wholly_blank_notebook_is_no_answer_to_its_items(klass):
+    """Every other student of the stronger half hands q1_imaging in untouched (every cell
+    ``unanswered``): counted as answers, their zeros against high rest scores would make
+    ``test_strong`` look like a bad item; left out, the numbers are those of the students who
+    attempted it. A notebook with one attempted cell stays an answer to every item."""
+    results = list(klass["results"])
+    blank = {s for s, r in klass["rank"].items() if r < N // 2 and r % 2 == 0}
+    half = next(s for s, r in klass["rank"].items() if r == 1)   # attempted one cell only
+
+    def untouched(r):
+        return _result(r.student, r.notebook, r.grade_id, 0.0, r.max_score, r.kind, r.name,
+                       status=Status.UNANSWERED)
+    results = [untouched(r) if r.notebook == "q1_imaging" and (
+        r.student in blank or (r.student == half and r.grade_id != "test_everyone")) else r
+        for r in results]
+    stats = {s.grade_id: s for s in items.item_statistics(items.responses(results))}
+    oracle = _oracle([r for r in results
+                      if not (r.student in blank and r.notebook == "q1_imaging")])
+    for gid in ("test_strong", "test_everyone", "test_q1_item1"):
+        n, facility, disc, ul = oracle[("q1_imaging", gid)]
+        assert stats[gid].n == n == N - len(blank), gid
+        assert stats[gid].facility == pytest.approx(facility, abs=1e-12)
+        assert (stats[gid].discrimination is None) == (disc is None)
+        if disc is not None:
+            assert stats[gid].discrimination == pytest.approx(disc, abs=1e-9)
+        assert stats[gid].upper_lower == pytest.approx(ul, abs=1e-12)
+    assert stats["test_f00"].n == N                      # their other notebook still counts
+    assert stats["test_strong"].discrimination > 0.3
+    # counted as answers, the blank notebooks would give the item everyone who tried it got
+    # right a negative discrimination (zeros against high rest scores)
+    assert _oracle(results)[("q1_imaging", "test_everyone")][2] < -0.3
+    assert stats["test_everyone"].discrimination is None and stats["test_everyone"].facility == 1
+
+
 def test_one_student_and_all_equal_scores(tmp_path):
     one = [_result("kim", "q1_imaging", "test_a", 1.0), _result("kim", "q1_imaging", "test_b", 0.0)]
     stats = items.item_statistics(items.responses(one))

@@ -223,23 +223,40 @@ def _export(term, sources) -> None:
     assert "alice/" in refused.stderr and not (out / "canvas.csv").exists()
     _autograder("export", "--out", str(out), "--course", str(term["course"]), "--allow-unmarked",
                 "--decimals", "2")
-    with open(out / "canvas.csv", newline="", encoding="utf-8") as f:
-        rows = {r["SIS User ID"]: r for r in csv.DictReader(f)}
-    total_col = next(k for k in next(iter(rows.values())) if k.startswith(f"{A} total"))
     maximum = sum(p for s in sources for *_, p in s.graded) + sum(
         p for s in sources for _, p in s.manual)
-    assert total_col == f"{A} total ({maximum:g})"
+    points, rows = _canvas_rows(out)
+    assert points == {A: f"{maximum:g}"}                    # the total alone, its maximum below
+    questions = out / "questions"
+    _autograder("export", "--out", str(questions), "--course", str(term["course"]),
+                "--allow-unmarked", "--decimals", "2", "--canvas-questions")
+    q_points, q_rows = _canvas_rows(questions)
+    assert q_points == {f"{A} {s.name}": f"{_maximum(s):g}" for s in sources}
     with _gradebook(term) as gb:
         for student in STUDENTS:
             sub = gb.find_submission(A, student)
-            assert float(rows[student][total_col]) == pytest.approx(sub.score, abs=0.006)
+            assert float(rows[student][A]) == pytest.approx(sub.score, abs=0.006)
             for nb in sub.notebooks:
-                col = next(k for k in rows[student] if k.startswith(f"{nb.name} ("))
-                assert float(rows[student][col]) == pytest.approx(nb.score, abs=0.006)
+                assert float(q_rows[student][f"{A} {nb.name}"]) == pytest.approx(nb.score,
+                                                                                abs=0.006)
     _late_export(term, out, maximum)
     auto_max = sum(p for s in sources for *_, p in s.graded)
     alice_auto = sum(v[0] or 0.0 for k, v in _state(term).items() if k[0] == "alice")
     assert alice_auto == pytest.approx(auto_max, abs=1e-6), "the model code earns every mark"
+
+
+def _maximum(src) -> float:
+    return sum(p for *_, p in src.graded) + sum(p for _, p in src.manual)
+
+
+def _canvas_rows(out: Path) -> tuple[dict[str, str], dict[str, dict]]:
+    """canvas.csv's marks columns with their Points Possible, and its rows by SIS User ID."""
+    with open(out / "canvas.csv", newline="", encoding="utf-8") as f:
+        head, points, *rows = list(csv.reader(f))
+    assert points[0].strip() == "Points Possible"
+    assert not any(h.rstrip().endswith(")") for h in head), head   # Canvas reads (N) as an id
+    by_id = {r[2]: dict(zip(head, r)) for r in rows}
+    return dict(zip(head[5:], points[5:])), by_id
 
 
 def _late_export(term, out: Path, maximum: float) -> None:
