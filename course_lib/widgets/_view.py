@@ -176,13 +176,7 @@ def one_message_at_a_time(layout, fig):
     (``Widget._handle_msg``: set the state the page sent, fire the observers, run the
     callbacks of a click or of a custom message)."""
     lock = figure_lock(fig)
-    todo, seen = [layout], set()
-    while todo:
-        widget = todo.pop()
-        if id(widget) in seen:
-            continue
-        seen.add(id(widget))
-        todo.extend(getattr(widget, "children", ()))
+    for widget in _widgets_in(layout):
         comm = getattr(widget, "comm", None)
         if comm is None:
             continue
@@ -196,11 +190,8 @@ def one_message_at_a_time(layout, fig):
     return layout
 
 
-def mark_live_readouts(layout):
-    """Give the explorer's text readouts (its ``HTML`` and ``Label`` widgets; not the typeset
-    formulas, which a screen reader would spell out on every move) the class ``course-live``:
-    the figure canvas' page code makes them ``aria-live="polite"`` status regions, so a
-    screen reader announces what a control's move changed. Returns ``layout``."""
+def _widgets_in(layout):
+    """Every widget of ``layout``'s tree, each once (a widget may sit in two boxes)."""
     todo, seen = [layout], set()
     while todo:
         widget = todo.pop()
@@ -208,6 +199,15 @@ def mark_live_readouts(layout):
             continue
         seen.add(id(widget))
         todo.extend(getattr(widget, "children", ()))
+        yield widget
+
+
+def mark_live_readouts(layout):
+    """Give the explorer's text readouts (its ``HTML`` and ``Label`` widgets; not the typeset
+    formulas, which a screen reader would spell out on every move) the class ``course-live``:
+    the figure canvas' page code makes them ``aria-live="polite"`` status regions, so a
+    screen reader announces what a control's move changed. Returns ``layout``."""
+    for widget in _widgets_in(layout):
         if type(widget) in (W.HTML, W.Label):
             widget.add_class("course-live")
     return layout

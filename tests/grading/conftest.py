@@ -11,6 +11,8 @@ import pytest
 
 from gradingtools import course_sources
 
+from autograder.isolation import IsolationUnavailable, probe
+
 
 @pytest.fixture(scope="session")
 def sources():
@@ -29,3 +31,13 @@ def template_gradebook(tmp_path_factory, sources):
     db = folder / "gradebook.db"
     register_cells(f"sqlite:///{db}", sources)
     return db
+
+
+@pytest.fixture(scope="module")
+def mode():
+    """The sandbox's mode on this machine (as root: a uid of its own); skips when the operating
+    system cannot isolate students' code here."""
+    try:
+        return probe()
+    except IsolationUnavailable as exc:
+        pytest.skip(str(exc))

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from autograder.isolation import (CaseInput, IsolationUnavailable, Limits, Mode, NameJob,
-                                  NotebookJob, probe, run_notebook)
+                                  NotebookJob, run_notebook)
 from autograder.isolation import bwrap, child, identity
 from autograder.model import OutcomeKind as K
 
@@ -27,14 +27,6 @@ pytestmark = pytest.mark.xdist_group("isolation")
 REPO = Path(__file__).resolve().parents[2]
 FAST = Limits(case_timeout=2.0, load_timeout=10.0)
 SETUP = "import numpy as np\n"
-
-
-@pytest.fixture(scope="module")
-def mode():
-    try:
-        return probe()
-    except IsolationUnavailable as exc:
-        pytest.skip(str(exc))
 
 
 def fn(name: str, source: str, cases=((),), cap: int = 1_000_000, kind: str = "function"):

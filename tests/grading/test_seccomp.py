@@ -31,14 +31,6 @@ FAST = Limits(case_timeout=5.0, load_timeout=20.0)
 SETUP = "import numpy as np\n"
 
 
-@pytest.fixture(scope="module")
-def mode():
-    try:
-        return probe()
-    except IsolationUnavailable as exc:
-        pytest.skip(str(exc))
-
-
 def fn(name: str, source: str, cases=((),)) -> NameJob:
     return NameJob(name, "function", [(f"{name}-cell", textwrap.dedent(source))],
                    [CaseInput(tuple(a), {}, 1_000_000) for a in cases])
