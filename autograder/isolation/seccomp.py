@@ -52,9 +52,6 @@ REFUSED = (
     "execve", "execveat", "memfd_create", "memfd_secret", "shmat", "uselib",
     # a code segment of the process's own (Docker's default profile refuses it too)
     "modify_ldt",
-    # a new session would get a CPU share of its own from the scheduler's autogroups, so a job's
-    # processes could crowd out other students' jobs; the worker's own setsid comes first
-    "setsid",
     # the kernel keyrings (not namespaced: a key would outlive the job)
     "add_key", "keyctl", "request_key",
     # other processes' memory
