@@ -85,15 +85,3 @@ def pytest_collection_modifyitems(config, items):
         if names and "@" not in item.nodeid and hasattr(item, "_id"):
             item._id = NodeId.parse(f"{item.nodeid}@{'_'.join(names)}")
 
-
-@pytest.fixture(autouse=True)
-def _no_leaked_running_loop():
-    """No test runs inside an event loop, so a loop still marked as running in this thread is
-    left over from an earlier test of the same worker (an in-process notebook run can leave one):
-    it would make Playwright's sync API refuse to start and send the explorers' deferred work to
-    a loop that never runs. Clear the mark before each test."""
-    import asyncio.events
-
-    if asyncio.events._get_running_loop() is not None:
-        asyncio.events._set_running_loop(None)
-    yield

@@ -93,8 +93,12 @@ def lab_server(tmp_path_factory):
         log.close()
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def browser():
+    """Debian's Chromium for one test module. Not for the session: while Playwright's sync API
+    is open, its event loop is marked as running in this thread, so the other tests an xdist
+    worker runs in between would see a running loop (the explorers then put off their text
+    alternatives, and a second ``sync_playwright`` refuses to start)."""
     if not CHROMIUM.exists():
         pytest.skip("Debian's chromium is not installed (make test installs it when run as root)")
     from playwright.sync_api import sync_playwright
