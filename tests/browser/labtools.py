@@ -9,6 +9,7 @@ import subprocess
 import sys
 import time
 import urllib.request
+import uuid
 from pathlib import Path
 
 import pytest
@@ -46,3 +47,35 @@ def running_lab(args: list[str], port: int, log_path: Path, cwd: Path, env: dict
         except subprocess.TimeoutExpired:
             proc.kill()
         log.close()
+
+
+def open_notebook(page, base: str, query: str, path: str) -> None:
+    """Open ``path`` in a JupyterLab workspace of its own, reset, and wait for its cells.
+
+    JupyterLab restores the tabs of the last session (its workspaces live in the user's
+    settings, shared by every lab a test run starts): without a workspace of its own the page
+    may show another test's notebook in front and this one's cells hidden behind it."""
+    workspace = "t" + uuid.uuid4().hex[:12]
+    page.goto(f"{base}/lab/workspaces/{workspace}/tree/{path}?reset&{query}")
+    page.locator(".jp-NotebookPanel:visible .jp-Notebook .jp-Cell").first.wait_for()
+
+
+def wait_idle(page, timeout_s: float) -> None:
+    """Until the kernel is idle and no cell shows a pending prompt [*]."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        status = page.locator(".jp-StatusBar-Widget").all_inner_texts()
+        busy = page.locator(".jp-InputArea-prompt", has_text="[*]").count()
+        if busy == 0 and any("Idle" in s for s in status):
+            return
+        time.sleep(0.5)
+    raise AssertionError(f"kernel still busy after {timeout_s} s")
+
+
+def run_all_cells(page, start_s: float = 120, run_s: float = 300) -> None:
+    """Run > Run All Cells once the kernel is up, and wait until it is idle again."""
+    wait_idle(page, start_s)
+    page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
+    page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+    time.sleep(1.0)  # the first cell's [*] appears only after the click is handled
+    wait_idle(page, run_s)

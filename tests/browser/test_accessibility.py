@@ -28,8 +28,8 @@ import pytest
 
 from a11y import counts, describe, run_axe, save, severe
 from autograder.course import nbgrader_env
-from labtools import running_lab
-from test_explorers_in_lab import FIGURE_CANVAS, _wait_idle, canvas_pixels, wait_for_change
+from labtools import open_notebook, run_all_cells, running_lab, wait_idle
+from test_explorers_in_lab import FIGURE_CANVAS, canvas_pixels, wait_for_change
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.xdist_group("browser")]
 
@@ -86,15 +86,10 @@ def ran(request, browser, student_lab, artifacts):
     page = context.new_page()
     page.set_default_timeout(60_000)
     try:
-        page.goto(f"{base}/lab/tree/tripos2006/{name}.ipynb?{query}&reset")
-        page.wait_for_selector(".jp-NotebookPanel .jp-Notebook .jp-Cell")
-        _wait_idle(page, 120)
-        page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
-        page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
-        time.sleep(1.0)
-        _wait_idle(page, 600)
+        open_notebook(page, base, query, f"tripos2006/{name}.ipynb")
+        run_all_cells(page, 120, 600)
         page.locator(FIGURE_CANVAS).first.wait_for(timeout=120_000)
-        _wait_idle(page, 120)
+        wait_idle(page, 120)
         time.sleep(1.0)
         yield name, page
     finally:

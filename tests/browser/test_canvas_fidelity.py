@@ -51,6 +51,7 @@ import time
 
 import numpy as np
 import pytest
+from labtools import open_notebook
 from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.xdist_group("browser")]
@@ -150,8 +151,7 @@ def open_explorer(page, lab_server, name, module, factory, prelude=""):
 
 
 def run_all(page, base, token, name):
-    page.goto(f"{base}/lab/tree/{name}?token={token}&reset")
-    page.wait_for_selector(".jp-NotebookPanel .jp-Notebook .jp-Cell")
+    open_notebook(page, base, f"token={token}", name)
     page.locator(".jp-StatusBar-Widget", has_text="Idle").first.wait_for(timeout=120_000)
     page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
     page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()

@@ -16,6 +16,8 @@ import time
 import numpy as np
 import pytest
 
+from labtools import open_notebook, run_all_cells
+
 pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.xdist_group("browser")]
 
 #: the explorers' figure: a ``FigureCanvas`` widget painted by the page (issue 15)
@@ -23,30 +25,15 @@ FIGURE_CANVAS = "canvas.course-figure-canvas"
 
 
 def open_and_run_all(page, base, token, name, artifacts, timeout_s=240):
-    page.goto(f"{base}/lab/tree/{name}?token={token}&reset")
-    page.wait_for_selector(".jp-NotebookPanel .jp-Notebook .jp-Cell")
+    open_notebook(page, base, f"token={token}", name)
     page.wait_for_selector(".jp-Notebook-ExecutionIndicator, .jp-StatusBar-TextItem", timeout=60_000)
-    _wait_idle(page, 60)
-    page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
-    page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
-    time.sleep(1.0)
-    _wait_idle(page, timeout_s)
+    run_all_cells(page, 60, timeout_s)
     page.screenshot(path=str(artifacts / f"{name}-after-run-all.png"), full_page=False)
     errors = page.locator(".jp-OutputArea-output[data-mime-type='application/vnd.jupyter.stderr']")
     tracebacks = [t for t in errors.all_inner_texts() if "Traceback" in t or "Error" in t.split("\n")[0]]
     assert not tracebacks, f"{name}: errors after Run All:\n" + "\n---\n".join(tracebacks)[:3000]
 
 
-def _wait_idle(page, timeout_s):
-    """Until the kernel is idle and no cell shows a pending prompt [*]."""
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        status = page.locator(".jp-StatusBar-Widget").all_inner_texts()
-        busy = page.locator(".jp-InputArea-prompt", has_text="[*]").count()
-        if busy == 0 and any("Idle" in s for s in status):
-            return
-        time.sleep(0.5)
-    raise AssertionError(f"kernel still busy after {timeout_s} s")
 
 
 def canvas_pixels(locator) -> np.ndarray:
@@ -84,8 +71,7 @@ def explorer_output(page, control_text):
 
 def test_nbgrader_extension_present(page, lab_server, artifacts):
     base, token, _ = lab_server
-    page.goto(f"{base}/lab/tree/q5_phong.ipynb?token={token}&reset")
-    page.wait_for_selector(".jp-NotebookPanel .jp-Notebook .jp-Cell")
+    open_notebook(page, base, f"token={token}", "q5_phong.ipynb")
     validate = page.locator(".jp-NotebookPanel-toolbar", has_text="Validate")
     validate.first.wait_for(timeout=30_000)
     assert page.locator(".lm-MenuBar-itemLabel", has_text="Nbgrader").count() == 1

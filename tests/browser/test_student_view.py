@@ -10,7 +10,7 @@ import time
 import pytest
 
 from autograder.course import nbgrader_env
-from labtools import running_lab
+from labtools import open_notebook, run_all_cells, running_lab, wait_idle
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow, pytest.mark.xdist_group("browser")]
 
@@ -29,8 +29,7 @@ def student_lab(tmp_path, repo_root, free_port):
 
 def test_student_sees_release_notebooks_and_validate_only(page, student_lab, artifacts):
     base, query = student_lab.split("/lab", 1)[0], student_lab.split("?", 1)[1]
-    page.goto(f"{base}/lab/tree/tripos2006/q5_phong.ipynb?{query}")
-    page.wait_for_selector(".jp-NotebookPanel .jp-Notebook .jp-Cell")
+    open_notebook(page, base, query, "tripos2006/q5_phong.ipynb")
     # the notebook served to the student is the release: stubs, no model solution
     resp = page.request.get(f"{base}/api/contents/tripos2006/q5_phong.ipynb?{query}")
     assert resp.ok
@@ -55,20 +54,15 @@ def test_student_run_all_on_untouched_notebook_renders_explorers(page, student_l
     """A student opens an untouched release notebook and chooses Run All: the stubs and the
     failing tests show their errors (their cells carry the ``raises-exception`` tag), and every
     cell below them still runs, so the figures and the explorer render."""
-    from test_explorers_in_lab import FIGURE_CANVAS, _wait_idle, canvas_pixels
+    from test_explorers_in_lab import FIGURE_CANVAS, canvas_pixels
 
     base, query = student_lab.split("/lab", 1)[0], student_lab.split("?", 1)[1]
-    page.goto(f"{base}/lab/tree/tripos2006/q5_phong.ipynb?{query}")
-    page.wait_for_selector(".jp-NotebookPanel .jp-Notebook .jp-Cell")
-    _wait_idle(page, 90)
-    page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
-    page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
-    time.sleep(1.0)
-    _wait_idle(page, 300)
+    open_notebook(page, base, query, "tripos2006/q5_phong.ipynb")
+    run_all_cells(page, 90, 300)
     # the explorer (the last code cell) rendered: its figure canvas is not blank
     out = page.locator(".jp-OutputArea-output").filter(has=page.locator(FIGURE_CANVAS)).first
     out.wait_for(timeout=120_000)
-    _wait_idle(page, 120)
+    wait_idle(page, 120)
     page.screenshot(path=str(artifacts / "student-run-all.png"))
     canvas = out.locator(FIGURE_CANVAS).first
     pixels = canvas_pixels(canvas)
