@@ -17,11 +17,10 @@ import datetime as dt
 import sys
 from pathlib import Path
 
-from .course import DEFAULT_COURSE_ROOT, default_db_url
+from .course import ASSIGNMENT, DEFAULT_COURSE_ROOT, default_db_url
 from .outputs.gradebook_url import MissingDriver, resolve_db_url
 from .exercises import REGISTRY
 from .grade.sources import default_sources, load_source
-from .model import ASSIGNMENT
 from .outputs import export
 
 #: Unmarked answers listed by name before "and N more".

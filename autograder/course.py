@@ -28,10 +28,13 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from course_lib.variants import ASSIGNMENT
+
 from . import explanations
 
-#: The nbgrader assignment that holds all six question notebooks.
-ASSIGNMENT = "tripos2006"
+#: ``ASSIGNMENT``: the nbgrader assignment that holds all six question notebooks, named once in
+#: ``course_lib.variants`` (each student's numbers are drawn from it, and that module ships to
+#: students without ``autograder``).
 #: The nbgrader course id.
 COURSE_ID = "4f9"
 #: The repository root (the folder holding ``notebooks/`` and ``autograder/``).

@@ -16,8 +16,6 @@ import re
 from dataclasses import dataclass, field
 from typing import Any
 
-ASSIGNMENT = "tripos2006"
-
 
 class CellKind(str, enum.Enum):
     """What kind of graded cell a row of the gradebook is."""

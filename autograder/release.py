@@ -25,6 +25,7 @@ from pathlib import Path
 import nbformat
 
 from . import explanations, student_bundle
+from .cells import CellRole, cell_role
 from .course import (
     ASSIGNMENT,
     DEFAULT_COURSE_ROOT,
@@ -68,7 +69,7 @@ def leaks(notebook: Path) -> list[str]:
         for marker in FORBIDDEN:
             if marker.lower() in cell.source.lower():
                 problems.append(f"{where}: contains {marker!r}")
-        if (cell.cell_type == "markdown" and meta.get("solution") and meta.get("grade")
+        if (cell.cell_type == "markdown" and cell_role(meta) is CellRole.MANUAL
                 and cell.source.strip() != TEXT_STUB):
             problems.append(f"{where}: a manually graded answer cell is not the stub {TEXT_STUB!r}")
         if explanations.is_explanation(cell):
@@ -90,7 +91,7 @@ def untagged_cells(notebook: Path) -> list[str]:
     for i, cell in enumerate(nb.cells):
         meta = cell.get("metadata", {})
         grading = meta.get("nbgrader", {})
-        if cell.cell_type != "code" or not (grading.get("solution") or grading.get("grade")):
+        if cell.cell_type != "code" or cell_role(grading) is CellRole.OTHER:
             continue
         if RUN_ALL_TAG not in meta.get("tags", []):
             problems.append(f"{notebook.name} cell {i} ({grading.get('grade_id')}): "

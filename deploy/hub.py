@@ -51,7 +51,6 @@ from pathlib import Path
 DEPLOY = Path(__file__).resolve().parent
 REPO = DEPLOY.parent
 SYSTEM_PYTHON = "/usr/bin/python3"
-ASSIGNMENT = "tripos2006"
 #: JupyterHub of the hub and of both environments (the singleuser must match the hub's major)
 JUPYTERHUB_REQUIREMENT = "jupyterhub>=5,<6"
 
@@ -297,6 +296,8 @@ def prepare_course(s: HubSettings) -> None:
         if link.exists():
             raise RuntimeError(f"{link} exists and is not a link to the hub's exchange")
         link.symlink_to(s.paths["exchange"])
+    from autograder.course import ASSIGNMENT
+
     python = Path(s.paths["instructor_env"]) / "bin" / "python"
     as_grader(s, [python, "-m", "autograder", "release", "--course-root", course])
     as_grader(s, [python, "-m", "nbgrader", "release_assignment", ASSIGNMENT, "--force"])

@@ -18,12 +18,12 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .. import judging
-from ..course import TEXT_STUB
+from ..course import ASSIGNMENT, TEXT_STUB
 from ..exercises import REGISTRY
 from ..isolation import CaseInput, Limits, Mode, NameJob, NotebookJob
-from ..isolation.child import OFF_LIMITS
+from ..isolation.allowlist import OFF_LIMITS
 from ..isolation.jobs import CHOICE, FUNCTION
-from ..model import (ASSIGNMENT, AnswerHint, AnswerShape, Batch, CaseOutcome, CaseRecord, CellKind,
+from ..model import (AnswerHint, AnswerShape, Batch, CaseOutcome, CaseRecord, CellKind,
                      CellResult, NameRun, OutcomeKind, SourceNotebook, Status, Submission, Verdict)
 from .cases import DrawnCase, case_seed, draw, job_digest
 from .executors import make_executor

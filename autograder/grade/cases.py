@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exercises.base import Case, Exercise
-from ..model import ASSIGNMENT
+from ..course import ASSIGNMENT
 
 #: Bytes every case may return beyond four times its expected answer's size.
 RESULT_SLACK = 16 * 2**10

@@ -14,7 +14,7 @@ import inspect
 import re
 from dataclasses import dataclass, field
 
-from ..isolation.child import ALLOWED_COURSE_MODULES, ALLOWED_REFERENCE, ALLOWED_WHOLE_MODULES
+from ..isolation.allowlist import ALLOWED_COURSE_MODULES, ALLOWED_REFERENCE, ALLOWED_WHOLE_MODULES
 from ..model import AnswerHint, AnswerShape, CellKind, SourceNotebook, Status, Submission
 
 #: Characters of code in one cell the grader reads (parses, sends to the sandbox): an answer
@@ -243,7 +243,7 @@ def reference_import(tree: ast.AST) -> str:
     """The first import of the course's reference in ``tree`` (anywhere in it), else ``""``.
 
     Everything under ``course_lib`` is the reference except the data tables the sandbox
-    provides (:data:`autograder.isolation.child.ALLOWED_REFERENCE`).
+    provides (:data:`autograder.isolation.allowlist.ALLOWED_REFERENCE`).
     """
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):

@@ -15,8 +15,9 @@ import stat
 import sys
 from pathlib import Path
 
-from ..model import ASSIGNMENT, Status, Submission
-from .sources import join_source
+from ..cells import join_source
+from ..course import ASSIGNMENT
+from ..model import Status, Submission
 
 MAX_NOTEBOOK_MB = 25.0
 #: Characters of code (all code cells together) a notebook may hold: an answer needs far less,

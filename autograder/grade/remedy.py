@@ -27,7 +27,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..model import ASSIGNMENT, Batch
+from ..course import ASSIGNMENT
+from ..model import Batch
 from .whose import other_students
 
 _ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._@+-]{0,127}$")

@@ -5,14 +5,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..cells import CellRole, cell_role, join_source
 from ..model import SourceCell, SourceNotebook
-
-
-def join_source(source) -> str:
-    """A notebook cell's ``source`` (a string or a list of strings) as one string."""
-    if isinstance(source, list):
-        return "".join(str(s) for s in source)
-    return source if isinstance(source, str) else ""
 
 
 def load_source(path: Path) -> SourceNotebook:
@@ -32,12 +26,13 @@ def load_source(path: Path) -> SourceNotebook:
         gid = c.meta.get("grade_id")
         if not gid:
             continue
-        if c.cell_type == "code" and c.meta.get("solution") and not c.meta.get("grade"):
+        role = cell_role(c.meta)
+        if c.cell_type == "code" and role is CellRole.ANSWER:
             solution_ids.append(gid)
-        elif c.cell_type == "code" and c.meta.get("grade") and not c.meta.get("solution"):
+        elif c.cell_type == "code" and role is CellRole.TESTS:
             target = gid[len("test_"):] if gid.startswith("test_") else gid
             graded.append((target, gid, float(c.meta.get("points", 0) or 0)))
-        elif c.meta.get("grade") and c.meta.get("solution"):
+        elif role is CellRole.MANUAL:
             manual.append((gid, float(c.meta.get("points", 0) or 0)))
     return SourceNotebook(name, Path(path), nb, setup.source if setup else "", cells,
                           solution_ids, graded, manual)

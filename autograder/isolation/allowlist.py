@@ -1,7 +1,8 @@
 """What graded code may use in the sandbox: the modules a solution may import
 (:data:`ALLOWED_MODULES`), and the allow-listed ``course_lib`` it holds (data tables as
-literals, and the answer-free modules of
-:data:`~autograder.isolation.child.ALLOWED_WHOLE_MODULES` as they are).
+literals, :data:`ALLOWED_REFERENCE`, and the answer-free modules of
+:data:`ALLOWED_WHOLE_MODULES` as they are). This is the grading policy: the grader's planning
+reads it here, and the sandbox program gets it in the job (:func:`sandbox_policy`).
 
 The modules are loaded by the sandbox before any student text runs; after that, the seccomp
 filter (:mod:`.seccomp`) lets no compiled code be loaded, so an import of any other extension
@@ -9,7 +10,7 @@ module fails (``rejected-code``). Pure-Python modules of the standard library th
 other compiled code still import; the notebooks name only this list
 (:func:`notebook_sentence`, checked against every notebook's first cell by the tests).
 
-:data:`autograder.isolation.child.ALLOWED_REFERENCE` names them; this module writes a tiny
+:data:`ALLOWED_REFERENCE` names the tables; this module writes a tiny
 ``course_lib`` package holding exactly those values (copied from the real modules), so a setup
 cell's ``from course_lib.marching_cubes import TRI_TABLE`` works while no reference code, no
 source and no other module of the course is ever in the sandbox.
@@ -23,7 +24,17 @@ import os
 
 import numpy as np
 
-from .child import ALLOWED_REFERENCE, ALLOWED_WHOLE_MODULES
+#: THE allow-list: the only parts of ``course_lib`` present in the sandbox (the data tables
+#: the Q3 setup cell imports, copied as literals by the grader). Anything else under
+#: ``course_lib`` is a reference: absent, and reported as such.
+ALLOWED_REFERENCE = {"course_lib.marching_cubes": ("CORNERS", "EDGES", "FACES", "N_TRIANGLES",
+                                                   "TRI_TABLE")}
+#: Whole modules of ``course_lib`` the sandbox holds as they are: they know no answer
+#: (``variants`` draws each student's numbers; the grader computes the answers on its side).
+ALLOWED_WHOLE_MODULES = ("course_lib.variants",)
+ALLOWED_COURSE_MODULES = ("course_lib", *ALLOWED_REFERENCE, *ALLOWED_WHOLE_MODULES)
+#: What the grading says of a course_lib import it met (the notebooks' own words).
+OFF_LIMITS = "course_lib, the course's reference library, which graded code may not use"
 
 #: THE modules a solution may use (each with what it imports), loaded in the sandbox before
 #: the filter: NumPy with its lazily loaded compiled parts, and the standard library's
@@ -34,6 +45,12 @@ STDLIB_MODULES = ("math", "cmath", "random", "statistics", "fractions", "decimal
                   "array", "struct", "copy", "dataclasses", "enum", "typing", "re", "string",
                   "json", "datetime", "time")
 ALLOWED_MODULES = NUMPY_MODULES + STDLIB_MODULES
+
+
+def sandbox_policy() -> dict:
+    """The ``course_lib`` policy as the job document carries it into the sandbox (read there by
+    ``inside.failures.Policy``): the modules present, and the words for a reference used."""
+    return {"course_modules": list(ALLOWED_COURSE_MODULES), "off_limits": OFF_LIMITS}
 
 
 def notebook_sentence() -> str:

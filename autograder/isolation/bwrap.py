@@ -28,7 +28,8 @@ from . import seccomp
 BWRAP = "/usr/bin/bwrap"
 SETPRIV = "/usr/bin/setpriv"
 SITE = "/sandbox/site"          #: where NumPy and the allow-listed tables appear inside
-CHILD = "/sandbox/child.py"     #: where the child program appears inside
+PROGRAM = "/sandbox/inside"     #: where the sandbox program's folder appears inside
+CHILD = PROGRAM + "/__main__.py"  #: the child program started inside
 JOB = "/job"                    #: where the job file appears inside
 #: Run first inside the sandbox (as root, before the uid changes): the private network
 #: namespace's loopback goes down too, so the sandbox has no working interface at all.
@@ -150,16 +151,17 @@ def interpreter_mounts() -> list[str]:
     return args
 
 
-def bwrap_command(job_file: str, allowlist_dir: str, child_file: str, channel_fd: int,
+def bwrap_command(job_file: str, allowlist_dir: str, program_dir: str, channel_fd: int,
                   scratch_mb: int, uid: int | None) -> list[str]:
-    """The command that runs the child in a fresh sandbox (as ``uid`` when root)."""
+    """The command that runs the child (the sandbox program of ``program_dir``, bound read-only)
+    in a fresh sandbox (as ``uid`` when root)."""
     argv = [BWRAP, *namespace_args(), "--ro-bind", "/usr", "/usr", *system_links(),
-            *interpreter_mounts(), "--perms", "0755", "--dir", os.path.dirname(CHILD),
+            *interpreter_mounts(), "--perms", "0755", "--dir", os.path.dirname(PROGRAM),
             "--perms", "0755", "--dir", SITE]
     for path in numpy_dirs():
         argv += ["--ro-bind", path, f"{SITE}/{os.path.basename(path)}"]
     argv += ["--ro-bind", os.path.join(allowlist_dir, "course_lib"), f"{SITE}/course_lib",
-             "--ro-bind", job_file, JOB, "--ro-bind", child_file, CHILD,
+             "--ro-bind", job_file, JOB, "--ro-bind", program_dir, PROGRAM,
              "--proc", "/proc", "--remount-ro", "/proc", "--dev", "/dev",
              "--size", str(int(scratch_mb) * 2**20), "--perms", "1777", "--tmpfs", "/tmp", "--chdir", "/tmp"]
     if uid is not None:   # as root: loopback down, noexec, then a uid of its own, no capability
@@ -175,15 +177,15 @@ def bwrap_command(job_file: str, allowlist_dir: str, child_file: str, channel_fd
                    "--channel-fd", str(channel_fd)]
 
 
-def unsafe_command(job_file: str, site_dir: str, child_file: str, channel_fd: int) -> list[str]:
+def unsafe_command(job_file: str, site_dir: str, program_dir: str, channel_fd: int) -> list[str]:
     """The same child without any sandbox (``Mode.UNSAFE``)."""
-    return [interpreter(), "-I", "-S", "-B", child_file, "--job", job_file, "--site", site_dir,
-            "--channel-fd", str(channel_fd)]
+    return [interpreter(), "-I", "-S", "-B", os.path.join(program_dir, "__main__.py"),
+            "--job", job_file, "--site", site_dir, "--channel-fd", str(channel_fd)]
 
 
 def child_env(home: str, student: str = "") -> dict[str, str]:
     """The child's whole environment: one BLAS thread, a private HOME, nothing of ours, and
-    the student whose notebook it is as ``JUPYTERHUB_USER`` (their numbers, issue 11)."""
+    the student whose notebook it is as ``JUPYTERHUB_USER`` (their numbers)."""
     env = {"PATH": "/usr/bin:/bin", "HOME": home, "TMPDIR": home, "LANG": "C.UTF-8",
            "LC_ALL": "C.UTF-8", "MPLBACKEND": "Agg", "MPLCONFIGDIR": home}
     if student:

@@ -1,9 +1,10 @@
 """The grader's side: run one student's notebook in one sandbox, read what comes back.
 
 :func:`run_notebook` writes the job (plain data only) into a private directory, takes a uid no
-other job uses (as root), makes the job's cgroup, starts the child (:mod:`.child`) inside
-bubblewrap, and reads its ONE channel with a hard byte cap and a wall-clock budget. Every
-record is re-validated here (:class:`Collector`); nothing the child announces is trusted. When
+other job uses (as root), makes the job's cgroup, starts the sandbox program (:mod:`.inside`,
+"the child") inside bubblewrap, and reads its ONE channel with a hard byte cap and a
+wall-clock budget. Every record is re-validated here (:class:`Collector`); nothing the child
+announces is trusted. When
 the job ends, for whatever reason, the sandbox is killed, and as root no process of its uid is
 left when this returns.
 """
@@ -21,7 +22,9 @@ import time
 
 from autograder.model import CaseOutcome, NameRun, OutcomeKind
 
-from . import allowlist, bwrap, child, seccomp
+from . import allowlist, bwrap, seccomp
+from .inside import wire
+from .inside.supervisor import GRACE, name_budget
 from .cgroup import JobCgroup
 from .identity import allocate_uid
 from .jobs import Limits, NotebookJob, validate_job
@@ -30,6 +33,8 @@ from .jobs import Limits, NotebookJob, validate_job
 STARTUP_SECONDS = 15.0
 #: Seconds per name the supervisor may spend clearing processes after the name's time is up.
 CLEANUP_SECONDS = 6.0
+#: The sandbox program's folder, bound read-only into the sandbox (:mod:`.inside`).
+PROGRAM_DIR = os.path.dirname(os.path.realpath(wire.__file__))
 NOTE_CHARS = 2000               #: characters kept of one load note
 #: The shell line that puts the sandbox into its cgroup(s) before anything in it starts.
 JOIN_CGROUP = 'while [ "$1" != -- ]; do echo $$ > "$1" || exit 125; shift; done; shift; exec "$@"'
@@ -45,12 +50,12 @@ ENDINGS = {
 
 def job_budget(job: NotebookJob, limits: Limits) -> float:
     """Wall seconds the whole job may take: the supervisor's own limits (the setup cell, then
-    per name :func:`child.name_budget <autograder.isolation.child.name_budget>`), never more
+    per name :func:`~autograder.isolation.inside.supervisor.name_budget`), never more
     than ``limits.job_timeout``, plus the time to start the sandbox and to clear processes."""
     lim = {k: getattr(limits, k) for k in Limits.__dataclass_fields__}
-    total = limits.load_timeout + child.GRACE
+    total = limits.load_timeout + GRACE
     for nj in job.names:
-        total += child.name_budget(lim, len(nj.cases)) + 0.5 * len(nj.cases)
+        total += name_budget(lim, len(nj.cases)) + 0.5 * len(nj.cases)
     return STARTUP_SECONDS + min(total, limits.job_timeout) + CLEANUP_SECONDS * len(job.names)
 
 
@@ -82,15 +87,15 @@ class NameState:
                           message=_text(rec.get("message"), NOTE_CHARS))
         kinds = {k.value: k for k in OutcomeKind}
         kind = kinds.get(rec.get("kind")) if type(rec.get("kind")) is str else None
-        if size > child.record_cap(case.result_cap, self.limits.output_bytes):
+        if size > wire.record_cap(case.result_cap, self.limits.output_bytes):
             out.message = "result too large"
         elif kind is None:
             out.message = "unrecognised result"
         elif kind is OutcomeKind.RETURNED:
             try:
-                out.value = child.decode_value(rec.get("value"), child.Budget(case.result_cap))
+                out.value = wire.decode_value(rec.get("value"), wire.Budget(case.result_cap))
                 out.kind, out.message = kind, ""
-            except child.BadValue as exc:
+            except wire.BadValue as exc:
                 out.message = str(exc)
         else:
             out.kind = kind
@@ -125,16 +130,16 @@ class Collector:
 
     def frame_cap(self) -> int:
         caps = [c.result_cap for s in self.names.values() for c in s.nj.cases] or [0]
-        return max(child.record_cap(max(caps), self.limits.output_bytes),
-                   child.record_cap(0, 2 * self.limits.output_bytes))
+        return max(wire.record_cap(max(caps), self.limits.output_bytes),
+                   wire.record_cap(0, 2 * self.limits.output_bytes))
 
     def total_cap(self) -> int:
         """The most bytes the channel may carry: every case's record cap, plus notes."""
         out = self.limits.output_bytes
-        total = child.RECORD_OVERHEAD
+        total = wire.RECORD_OVERHEAD
         for state in self.names.values():
-            total += sum(child.record_cap(c.result_cap, out) for c in state.nj.cases)
-            total += child.record_cap(0, 2 * out) + (len(state.nj.cells) + 4) * 12 * NOTE_CHARS
+            total += sum(wire.record_cap(c.result_cap, out) for c in state.nj.cases)
+            total += wire.record_cap(0, 2 * out) + (len(state.nj.cells) + 4) * 12 * NOTE_CHARS
         return total
 
     def take(self, rec: dict, raw: bytes) -> bool:
@@ -169,16 +174,17 @@ class Collector:
 
 def _job_document(job: NotebookJob, limits: Limits, privileged: bool, bpf: bytes = b"") -> dict:
     """The job as the child reads it: limits, setup, names, cases (inputs in wire format), the
-    modules to load before any student text runs, and the seccomp filter to install then."""
+    modules to load before any student text runs, the ``course_lib`` policy
+    (:func:`allowlist.sandbox_policy`), and the seccomp filter to install then."""
     names = []
     for k, nj in enumerate(job.names):
         cases = []
         for i, case in enumerate(nj.cases):
             try:
-                unlimited = child.Budget(1 << 62)
-                args = child.encode_value(tuple(case.args), unlimited)
-                kwargs = child.encode_value(dict(case.kwargs), unlimited)
-            except child.NotPlain as exc:
+                unlimited = wire.Budget(1 << 62)
+                args = wire.encode_value(tuple(case.args), unlimited)
+                kwargs = wire.encode_value(dict(case.kwargs), unlimited)
+            except wire.NotPlain as exc:
                 raise ValueError(f"job.names[{k}].cases[{i}] holds {exc}, not plain "
                                  "data") from None
             cases.append({"args": args, "kwargs": kwargs, "cap": case.result_cap})
@@ -187,7 +193,7 @@ def _job_document(job: NotebookJob, limits: Limits, privileged: bool, bpf: bytes
     lim = {k: getattr(limits, k) for k in Limits.__dataclass_fields__}
     lim.update(nproc=privileged, budget_seconds=math.ceil(job_budget(job, limits)))
     return {"limits": lim, "setup": job.setup_source, "names": names,
-            "modules": list(allowlist.ALLOWED_MODULES),
+            "modules": list(allowlist.ALLOWED_MODULES), "policy": allowlist.sandbox_policy(),
             "filter": base64.b64encode(bpf).decode("ascii")}
 
 
@@ -211,22 +217,21 @@ def _write_job_files(job: NotebookJob, limits: Limits, workdir: str, privileged:
 def _command(mode: bwrap.Mode, workdir: str, job_file: str, channel_fd: int, limits: Limits,
              uid: int | None) -> tuple[list[str], str]:
     """``(argv, cwd)`` of the child."""
-    child_file = os.path.realpath(child.__file__)
     if mode is bwrap.Mode.ISOLATED:
-        return bwrap.bwrap_command(job_file, os.path.join(workdir, "site"), child_file,
+        return bwrap.bwrap_command(job_file, os.path.join(workdir, "site"), PROGRAM_DIR,
                                    channel_fd, limits.scratch_mb, uid), "/"
     site = os.path.join(workdir, "site")
     for path in bwrap.numpy_dirs():
         os.symlink(path, os.path.join(site, os.path.basename(path)))
     scratch = os.path.join(workdir, "scratch")
     os.mkdir(scratch)
-    return bwrap.unsafe_command(job_file, site, child_file, channel_fd), scratch
+    return bwrap.unsafe_command(job_file, site, PROGRAM_DIR, channel_fd), scratch
 
 
 def _read_channel(proc: subprocess.Popen, rfd: int, collector: Collector,
                   deadline: float) -> str:
     """Feed the channel's records to ``collector``; how it ended (a key of ENDINGS)."""
-    reader = child.FrameReader(rfd, collector.frame_cap(), collector.total_cap())
+    reader = wire.FrameReader(rfd, collector.frame_cap(), collector.total_cap())
     while True:
         event, payload = reader.next(deadline)
         if event != "record":

@@ -37,8 +37,8 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..course import COURSE_ID
-from ..model import ASSIGNMENT, format_score
+from ..course import ASSIGNMENT, COURSE_ID
+from ..model import format_score
 from . import items
 
 

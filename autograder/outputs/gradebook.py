@@ -36,13 +36,12 @@ import traceback
 import warnings
 from pathlib import Path
 
-from ..course import default_db_url
-from ..model import (ASSIGNMENT, Batch, CellKind, CellResult, SourceNotebook, Status,
-                     Submission, printable)
+from ..cells import CellRole, cell_role, join_source
+from ..course import ASSIGNMENT, COURSE_ID, default_db_url
+from ..model import Batch, CellKind, CellResult, SourceNotebook, Status, Submission, printable
 from .choices import choice_legend
 from .safe_markdown import quoted_cell
 
-COURSE_ID = "4f9"
 #: Files of a submission folder the autograded folder keeps: nbgrader's ``release_feedback``
 #: needs both (``timestamp.txt`` names the submission, ``submission_secret.txt`` its exchange key).
 #: Metadata key of the marker's rubric cells in the autograded notebooks.
@@ -252,7 +251,7 @@ def _source_cell_json(src: SourceNotebook, index: int) -> dict:
 
 def _is_trusted(meta: dict) -> bool:
     """Cells the student may not change: locked cells and auto-graded test cells."""
-    return bool(meta.get("locked")) or (bool(meta.get("grade")) and not meta.get("solution"))
+    return bool(meta.get("locked")) or cell_role(meta) is CellRole.TESTS
 
 
 def _clean(cell: dict) -> dict:
@@ -267,7 +266,7 @@ def _clean(cell: dict) -> dict:
         cell.pop("outputs", None)
         cell.pop("execution_count", None)
     if isinstance(cell.get("source"), list):
-        cell["source"] = "".join(cell["source"])
+        cell["source"] = join_source(cell["source"])
     cell.pop("id", None)
     return cell
 
@@ -290,11 +289,11 @@ def autograded_notebook(src: SourceNotebook, sub: Submission,
                   "source": f"**Not graded automatically:** {sub.message}"}]
         for c in src.nb["cells"]:
             c = _clean(c)
-            meta = c["metadata"].get("nbgrader", {})
-            if meta.get("solution"):
+            role = cell_role(c["metadata"].get("nbgrader", {}))
+            if role.by_student:
                 c["source"] = ("*(not submitted)*" if c["cell_type"] == "markdown"
                                else "# (not submitted)\n")
-            elif meta.get("grade") and c["cell_type"] == "code":
+            elif role is CellRole.TESTS and c["cell_type"] == "code":
                 c["source"] = strip_hidden(c["source"])
             cells.append(c)
     else:
@@ -386,7 +385,7 @@ def _merge(src: SourceNotebook, sub: Submission) -> list[dict]:
         if not gid or gid in present:
             continue
         new = _clean(_source_cell_json(src, scell.index))
-        if scell.meta.get("solution"):
+        if cell_role(scell.meta).by_student:
             new["source"] = ("*(missing from the submission)*" if new["cell_type"] == "markdown"
                              else "# (missing from the submission)\n")
         elif new["cell_type"] == "code":

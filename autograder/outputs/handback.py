@@ -28,8 +28,8 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..course import COURSE_ID, run_nbgrader
-from ..model import ASSIGNMENT, format_score
+from ..course import ASSIGNMENT, COURSE_ID, run_nbgrader
+from ..model import format_score
 from .feedback import with_marks
 from .gradebook import CARRIED_FILES
 from .html import e, page

@@ -34,6 +34,8 @@ import re
 import bleach
 from jinja2 import pass_context
 
+from ..cells import join_source
+
 __all__ = ["ALLOWED_TAGS", "clean_html", "comment_html", "markdown2html", "quoted_cell"]
 
 #: HTML that nbconvert's markdown renderer produces for ordinary markdown, and nothing more
@@ -197,7 +199,7 @@ def quoted_cell(cell: dict) -> dict:
     that shows its text in a code block: never rendered as HTML, whatever its
     ``raw_mimetype``."""
     source = cell.get("source", "")
-    source = "".join(map(str, source)) if isinstance(source, list) else str(source)
+    source = join_source(source) if isinstance(source, list) else str(source)
     kind = re.sub(r"[^a-z]", "", str(cell.get("cell_type", "")).lower())[:20] or "unknown"
     fence = "`" * max(3, 1 + max((len(run) for run in re.findall(r"`+", source)), default=0))
     return {"cell_type": "markdown", "metadata": {},

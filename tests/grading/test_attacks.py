@@ -839,7 +839,7 @@ def test_a_table_in_another_cell_gains_nothing(elsewhere):
 
 CAP_ORACLE = """
 import json, importlib.util
-_spec = importlib.util.spec_from_file_location("_wire", "/sandbox/child.py")
+_spec = importlib.util.spec_from_file_location("_wire", "/sandbox/inside/wire.py")
 _wire = importlib.util.module_from_spec(_spec); _spec.loader.exec_module(_wire)
 _JOB = json.load(open("/job"))
 def _expected_is_none(args):

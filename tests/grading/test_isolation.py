@@ -19,7 +19,8 @@ import pytest
 
 from autograder.isolation import (CaseInput, IsolationUnavailable, Limits, Mode, NameJob,
                                   NotebookJob, run_notebook)
-from autograder.isolation import bwrap, child, identity
+from autograder.isolation import bwrap, identity
+from autograder.isolation.inside import wire
 from autograder.model import OutcomeKind as K
 
 pytestmark = pytest.mark.xdist_group("isolation")
@@ -560,9 +561,10 @@ def big(k):
                 pass
         return blocked
     if k == 3:   # switch off the worker's own size check: the supervisor still refuses it
-        import __main__
-        __main__.record_cap = lambda *args: 1 << 40
-        __main__.encode_value = lambda v, budget, depth=0: {"t": "list", "v": ["y" * 2**20] * 300}
+        import sys
+        worker = sys.modules["inside.worker"]      # the worker's own code: the student owns it
+        worker.record_cap = lambda *args: 1 << 40
+        worker.encode_value = lambda v, budget, depth=0: {"t": "list", "v": ["y" * 2**20] * 300}
         return 0
     return k
 '''
@@ -600,16 +602,16 @@ def _stream(*chunks: bytes):
 
 
 def test_reader_refuses_oversized_frames_before_reading_them():
-    rfd, writer = _stream(child.FRAME.pack(2**32 - 1) + b"{")
-    reader = child.FrameReader(rfd, frame_cap=4096, total_cap=10**9)
+    rfd, writer = _stream(wire.FRAME.pack(2**32 - 1) + b"{")
+    reader = wire.FrameReader(rfd, frame_cap=4096, total_cap=10**9)
     assert reader.next(time.monotonic() + 5) == ("too-large", None)
-    assert len(reader.buf) <= child.FRAME.size + 4096
+    assert len(reader.buf) <= wire.FRAME.size + 4096
     writer.join()
     os.close(rfd)
 
-    many = child.frame({"t": "note", "name": None, "text": "x" * 900}) * 50
+    many = wire.frame({"t": "note", "name": None, "text": "x" * 900}) * 50
     rfd, writer = _stream(many)
-    reader = child.FrameReader(rfd, frame_cap=4096, total_cap=10_000)
+    reader = wire.FrameReader(rfd, frame_cap=4096, total_cap=10_000)
     events = []
     while not events or events[-1] == "record":
         events.append(reader.next(time.monotonic() + 5)[0])
@@ -621,22 +623,22 @@ def test_reader_refuses_oversized_frames_before_reading_them():
 
 def test_decoder_checks_sizes_before_decoding():
     huge = {"t": "array", "dtype": "<f8", "shape": [10**6, 10**6], "v": "AAAA"}
-    with pytest.raises(child.BadValue, match="too large"):
-        child.decode_value(huge, child.Budget(1024))
+    with pytest.raises(wire.BadValue, match="too large"):
+        wire.decode_value(huge, wire.Budget(1024))
     lying = {"t": "array", "dtype": "<f8", "shape": [4], "v": "AAAA"}
-    with pytest.raises(child.BadValue, match="does not match"):
-        child.decode_value(lying, child.Budget(1024))
+    with pytest.raises(wire.BadValue, match="does not match"):
+        wire.decode_value(lying, wire.Budget(1024))
     for bad in ({"t": "array", "dtype": "|O", "shape": [1], "v": "AAAA"}, {"t": "pickle"},
                 {"t": "list", "v": "abc"}, [1, 2]):
-        with pytest.raises(child.BadValue):
-            child.decode_value(bad, child.Budget(1024))
+        with pytest.raises(wire.BadValue):
+            wire.decode_value(bad, wire.Budget(1024))
     deep = 1
     for _ in range(12):
         deep = {"t": "list", "v": [deep]}
-    with pytest.raises(child.BadValue, match="deeply"):
-        child.decode_value(deep, child.Budget(1024))
+    with pytest.raises(wire.BadValue, match="deeply"):
+        wire.decode_value(deep, wire.Budget(1024))
     value = np.arange(6, dtype=">i4").reshape(2, 3)
-    back = child.decode_value(child.encode_value(value, child.Budget(1024)), child.Budget(1024))
+    back = wire.decode_value(wire.encode_value(value, wire.Budget(1024)), wire.Budget(1024))
     assert back.dtype == np.dtype("<i4") and back.tolist() == [[0, 1, 2], [3, 4, 5]]
 
 

@@ -21,7 +21,8 @@ import numpy as np
 import pytest
 
 from autograder.isolation import (CaseInput, IsolationUnavailable, Limits, NameJob, NotebookJob,
-                                  allowlist, child, probe, run_notebook, seccomp)
+                                  allowlist, probe, run_notebook, seccomp)
+from autograder.isolation.inside import confine, failures
 from autograder.model import OutcomeKind as K
 
 pytestmark = pytest.mark.xdist_group("isolation")
@@ -175,7 +176,7 @@ def test_attack_is_rejected_code(mode, name):
     outcome = out.outcomes[0]
     assert outcome.kind is K.REJECTED_CODE, (outcome, out.load_notes)
     assert outcome.value is None
-    assert child.REFUSED_CODE in outcome.message
+    assert failures.REFUSED_CODE in outcome.message
 
 
 def test_a_refused_import_blames_only_the_cases_that_need_it(mode):
@@ -213,7 +214,7 @@ def test_a_library_written_to_tmp_cannot_be_loaded(mode):
     """)
     out = run(mode, tmp_so)["tmp_so"]
     assert out.outcomes[0].kind is K.REJECTED_CODE, out
-    assert any("/tmp/zz.so" in n and child.REFUSED_CODE in n for n in out.load_notes), out
+    assert any("/tmp/zz.so" in n and failures.REFUSED_CODE in n for n in out.load_notes), out
 
 
 def test_proc_self_mem_cannot_be_written(mode):
@@ -274,19 +275,19 @@ def test_a_worker_holds_no_writable_and_executable_memory(mode):
 FILTER_PROBE = r"""
 import ctypes, errno, json, mmap, os, sys, threading
 sys.path.insert(0, sys.argv[1])
-import child
+import confine
 libc = ctypes.CDLL(None, use_errno=True)
 libc.syscall.restype = ctypes.c_long
 libc.mmap.restype = ctypes.c_void_p
 libc.mmap.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int, ctypes.c_int, ctypes.c_int,
                       ctypes.c_long]
-child._preload([])
+confine.preload([])
 # prepared before the filter: i386 getpid through int 0x80 (mov eax, 20; int 0x80; ret)
 page = libc.mmap(None, 4096, 7, 0x22, -1, 0)
 ctypes.memmove(page, b"\xb8\x14\x00\x00\x00\xcd\x80\xc3", 8)
 int80 = ctypes.CFUNCTYPE(ctypes.c_int)(page)
 rw = libc.mmap(None, 4096, 3, 0x22, -1, 0)
-child._install_filter(bytes.fromhex(sys.argv[2]))
+confine.install_filter(bytes.fromhex(sys.argv[2]))
 
 def call(nr, *args):
     r = libc.syscall(nr, *args)
@@ -322,7 +323,7 @@ def test_filter_refuses_other_abis_namespaces_and_exec_memory():
         bpf = seccomp.filter_bytes()
     except seccomp.SeccompUnavailable as exc:
         pytest.skip(str(exc))
-    isolation = Path(child.__file__).parent
+    isolation = Path(confine.__file__).parent
     done = subprocess.run([sys.executable, "-I", "-c", FILTER_PROBE, str(isolation), bpf.hex()],
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr

@@ -1,0 +1,260 @@
+"""The supervisor: the sandbox's first process, which never runs student code.
+
+For each graded name it forks a worker (:mod:`.worker`), forwards the worker's records to the
+ONE channel the grader reads, restarts a crashed or hung worker for the remaining cases (at most
+``max_launches`` processes per name) under deadlines of its own that no record of a worker can
+move (a fixed one per case, a hard end per name and per notebook, ``job_timeout``), and kills
+every leftover process between names. When it is PID 1 of its own PID namespace (the
+sandbox), ``kill(-1, SIGKILL)`` cannot reach it, and clears everything else.
+
+Standard library only: this module runs inside the sandbox (the grader imports it for
+:func:`name_budget`).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+
+from .failures import Policy, describe_status
+from .wire import FrameReader, frame, record_cap, write_all
+from .worker import worker_main
+
+GRACE = 1.0                        #: seconds the supervisor waits beyond a worker's own alarm
+TIMEOUTS_IN_A_ROW = 3              #: after this many timeouts the rest of a name is not run
+
+
+def name_budget(limits: dict, n_cases: int) -> float:
+    """The most wall seconds one graded name may take: every launch's load budget and every
+    case's time limit (the grader's job budget adds these up)."""
+    load = float(limits["load_timeout"]) + GRACE
+    case = float(limits["case_timeout"]) + GRACE
+    return int(limits["max_launches"]) * load + max(1, n_cases) * case
+
+
+def kill_leftovers(worker_pid: int | None) -> None:
+    """Kill every process of the job but this one (as PID 1 of the sandbox: ``kill(-1)``;
+    elsewhere the worker's process group) and reap them."""
+    if os.getpid() != 1:
+        if worker_pid:
+            try:
+                os.killpg(worker_pid, signal.SIGKILL)
+            except OSError:
+                pass
+            try:
+                os.waitpid(worker_pid, 0)
+            except ChildProcessError:
+                pass
+        return
+    end = time.monotonic() + 5.0
+    while time.monotonic() < end:
+        try:
+            os.kill(-1, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        try:
+            while os.waitpid(-1, os.WNOHANG)[0] > 0:
+                pass
+        except ChildProcessError:
+            return
+        time.sleep(0.002)
+
+
+class NameSupervisor:
+    """Runs one graded name: launches workers, forwards their records, fills in the cases a
+    dead or hung worker could not report."""
+
+    def __init__(self, nj: dict, ns: dict, limits: dict, policy: Policy, channel: int,
+                 job_deadline: float = float("inf"), bpf: bytes = b""):
+        self.nj, self.ns, self.limits, self.channel = nj, ns, limits, channel
+        self.policy = policy       #: the grader's allow-list of course_lib, for the workers
+        self.bpf = bpf             #: the seccomp filter every worker installs
+        self.n = len(nj["cases"])
+        #: the hard end of this name: its own budget, never beyond the notebook's
+        self.hard = min(job_deadline, time.monotonic() + name_budget(limits, self.n))
+        self.job_deadline = job_deadline
+        self.deadlines: dict = {}  # case index -> its deadline, fixed once set
+        self.next = 0              # the first case without an outcome
+        self.launches = 0
+        self.timeouts = 0          # timeouts in a row
+        self.label = "?"           # the cell running now
+        self.pid = 0
+        self.status = None         # the worker's wait status, once collected
+
+    def emit(self, rec: dict) -> None:
+        rec.setdefault("name", self.nj["name"])
+        write_all(self.channel, frame(rec))
+
+    def settle(self, kind: str, message: str, seconds: float = 0.0) -> None:
+        """Give case ``self.next`` an outcome of the supervisor's own."""
+        self.emit({"t": "case", "i": self.next, "kind": kind, "message": message,
+                   "seconds": seconds})
+        self.timeouts = self.timeouts + 1 if kind == "timeout" else 0
+        self.next += 1
+
+    def settle_rest(self, kind: str, message: str) -> None:
+        while self.next < self.n:
+            self.settle(kind, message)
+
+    def run(self) -> None:
+        self.emit({"t": "name"})
+        while self.next < self.n or self.launches == 0:
+            if time.monotonic() >= self.hard:
+                self.settle_rest("not-run", self.out_of_time())
+                break
+            if self.launches >= int(self.limits["max_launches"]):
+                self.settle_rest("not-run", f"not run: the process died {self.launches} times")
+                break
+            if not self.launch():
+                break
+        self.settle_rest("not-run", "not run")
+        kill_leftovers(self.pid)
+        self.emit({"t": "end", "launches": self.launches})
+
+    def launch(self) -> bool:
+        """One worker process; True when another should continue with the remaining cases."""
+        kill_leftovers(self.pid)
+        self.launches += 1
+        rfd, wfd = os.pipe()
+        try:
+            pid = os.fork()
+        except OSError as exc:
+            os.close(rfd)
+            os.close(wfd)
+            self.settle_rest("crashed", f"could not start a process ({exc.strerror})")
+            return False
+        if pid == 0:   # the worker: never returns into the supervisor's code
+            try:
+                os.close(rfd)
+                os.close(self.channel)
+                worker_main(self.nj, self.ns, self.next, self.limits, self.policy, wfd,
+                            self.bpf)
+            finally:
+                os._exit(70)
+        os.close(wfd)
+        self.pid, self.status = pid, None
+        try:
+            return self.watch(FrameReader(rfd, self.frame_cap()))
+        finally:
+            os.close(rfd)
+
+    def frame_cap(self) -> int:
+        caps = [int(c["cap"]) for c in self.nj["cases"]] or [0]
+        return record_cap(max(caps), int(self.limits["output_bytes"]))
+
+    def out_of_time(self) -> str:
+        """Why the cases left have no result once the name's or the notebook's time is up."""
+        if time.monotonic() >= self.job_deadline:
+            return (f"not run: the notebook used up its time ({self.limits['job_timeout']:g} s "
+                    "for all its cells and cases)")
+        return "not run: this test used up its time (every restart included)"
+
+    def case_deadline(self, i: int, now: float) -> float:
+        """Case ``i``'s deadline, fixed the first time it is asked for (nothing the worker
+        sends can move it)."""
+        if i not in self.deadlines:
+            self.deadlines[i] = now + float(self.limits["case_timeout"]) + GRACE
+        return min(self.deadlines[i], self.hard)
+
+    def watch(self, reader: FrameReader) -> bool:
+        """Forward one worker's records. The deadlines are the supervisor's: ONE for loading
+        all the cells, one per case (fixed when the case is first due: after loading or after
+        the previous case's result), and the name's hard end; frames cannot move them."""
+        loading, started = True, time.monotonic()
+        deadline = min(started + float(self.limits["load_timeout"]) + GRACE, self.hard)
+        while True:
+            event, payload = reader.next(deadline, self.worker_alive)
+            if event != "record":
+                return self.failed(event, loading, started)
+            rec, raw = payload
+            t, now = rec.get("t"), time.monotonic()
+            if rec.get("name") != self.nj["name"]:
+                return self.failed("garbage", loading, started)
+            if t == "cell" and loading:   # the label only: the load deadline stays
+                self.label = str(rec.get("label"))[:100]
+            elif t == "note" and loading:
+                if self.launches == 1:
+                    self.emit({"t": "note", "text": str(rec.get("text"))[:2000]})
+            elif t == "loaded" and loading:
+                loading, started = False, now
+                deadline = self.case_deadline(self.next, now)
+                if self.launches == 1:
+                    self.emit({"t": "loaded", "defined": rec.get("defined") is True,
+                               "printed": str(rec.get("printed"))[:2 * self.limits["output_bytes"]]})
+            elif t == "start" and not loading and rec.get("i") == self.next:
+                deadline = self.case_deadline(self.next, now)
+            elif t == "case" and not loading and rec.get("i") == self.next:
+                if not self.forward_case(rec, raw):
+                    return False
+                started, deadline = now, self.case_deadline(self.next, now)
+            elif t == "done" and not loading:
+                return False
+            else:
+                return self.failed("garbage", loading, started)
+
+    def forward_case(self, rec: dict, raw: bytes) -> bool:
+        """Pass case ``self.next``'s result on; False when the rest of the name is not run."""
+        write_all(self.channel, raw)
+        self.timeouts = self.timeouts + 1 if rec.get("kind") == "timeout" else 0
+        self.next += 1
+        if self.timeouts >= TIMEOUTS_IN_A_ROW:
+            self.settle_rest("not-run", f"not run: the {TIMEOUTS_IN_A_ROW} cases "
+                                        "before it timed out")
+            return False
+        return True
+
+    def worker_alive(self) -> bool:
+        """False once the worker has exited (its wait status is kept)."""
+        if self.status is None:
+            try:
+                pid, status = os.waitpid(self.pid, os.WNOHANG)
+            except ChildProcessError:
+                pid, status = self.pid, 0
+            if pid:
+                self.status = status
+        return self.status is None
+
+    def exit_status(self, wait: float) -> str:
+        end = time.monotonic() + wait
+        while self.worker_alive():
+            if time.monotonic() >= end:
+                return "the process stopped responding"
+            time.sleep(0.005)
+        return describe_status(self.status)
+
+    def failed(self, event: str, loading: bool, started: float) -> bool:
+        """The worker died, hung or sent something wrong: settle what it left, decide."""
+        why = self.exit_status(1.0) if event == "eof" else ""
+        kill_leftovers(self.pid)
+        spent = time.monotonic() - started
+        if event == "timeout" and time.monotonic() >= self.hard:
+            self.settle_rest("not-run", self.out_of_time())
+            return False
+        if loading:
+            if event == "timeout":
+                self.settle_rest("timeout", f"the cells did not finish within "
+                                            f"{self.limits['load_timeout']:g} s (cell "
+                                            f"{self.label} was running)")
+            elif event == "eof":
+                self.settle_rest("crashed", f"crashed while running cell {self.label}: {why}")
+            else:
+                self.settle_rest("rejected", "the cells produced an unrecognised record")
+            return False
+        if self.next >= self.n:
+            return False
+        if event == "timeout":
+            self.settle("timeout", f"took longer than {self.limits['case_timeout']:g} s "
+                                   "(stopped by the supervisor)", spent)
+            if self.timeouts >= TIMEOUTS_IN_A_ROW:
+                self.settle_rest("not-run", f"not run: the {TIMEOUTS_IN_A_ROW} cases before "
+                                            "it timed out")
+                return False
+        elif event == "eof":
+            self.settle("crashed", why, spent)
+        elif event == "too-large":
+            self.settle("rejected", "result too large", spent)
+        else:
+            self.settle("rejected", "produced an unrecognised record", spent)
+        return True
+
