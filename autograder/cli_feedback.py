@@ -18,7 +18,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .course import DEFAULT_COURSE_ROOT, default_db_url
+from .course import ASSIGNMENT, DEFAULT_COURSE_ROOT, default_db_url
 from .outputs.gradebook_url import MissingDriver, resolve_db_url
 from .grade.sources import default_sources, load_source
 from .outputs import handback
@@ -92,5 +92,5 @@ def main(args: argparse.Namespace) -> int:
               f"collected through nbgrader's exchange): {', '.join(lacking)}", file=sys.stderr)
     handback.release(root, db_url, exclude=lacking)
     print("feedback released to the exchange: students run `nbgrader fetch_feedback "
-          "tripos2006` or use the Assignments panel", file=sys.stderr)
+          f"{ASSIGNMENT}` or use the Assignments panel", file=sys.stderr)
     return 0

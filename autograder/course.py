@@ -52,7 +52,7 @@ TEXT_STUB = "YOUR ANSWER HERE"
 #: stderr lines that must not zero a test cell (nbgrader scores a cell with any stderr as 0).
 IGNORE_STDERR = r"Matplotlib is building the font cache"
 
-_STAMP = ".tripos2006-release.json"
+_STAMP = f".{ASSIGNMENT}-release.json"
 
 
 def source_notebooks(notebooks_dir: Path | None = None) -> list[Path]:

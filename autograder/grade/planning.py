@@ -4,7 +4,7 @@
 what a cell defines), in notebook order as "Run All" would; test, figure and explorer cells
 never run. :func:`answer_hint` reads a graded cell's source (never running it) and says whether
 it is still the released stub, empty, or binds the graded name to None, a constant, or a
-function that cannot take the exercise's arguments (issue 9).
+function that cannot take the exercise's arguments.
 """
 
 from __future__ import annotations
@@ -100,7 +100,7 @@ def typed_answer(code: str, name: str):
     ``name = <literal>`` (a string, a number, ``True``/``False``, or lists and tuples of them;
     lists become tuples), else :data:`NOT_TYPED`.
 
-    Items are judged on what the student typed, never on what code computes (issue 11): a
+    Items are judged on what the student typed, never on what code computes: a
     notebook whose cells compute the answer from ``mine`` would hand every friend who copies it
     their own right answers.
     """

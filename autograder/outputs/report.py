@@ -16,6 +16,7 @@ from collections import Counter, defaultdict
 from collections.abc import Mapping
 from pathlib import Path
 
+from ..course import ASSIGNMENT
 from ..model import STATUS_MEANING, CellKind, CellResult, SourceNotebook, Status
 from .html import e, page, write_page
 from .items_html import STYLE as ITEMS_STYLE
@@ -119,7 +120,7 @@ def render(results: list[CellResult], sources: list[SourceNotebook],
     body += [similar_solutions_html(results, references, jobs), own_numbers_html(results)]
     body += [graded_as_html(graded_as or [])]
     body += _statuses_html(results)
-    return page("tripos2006: grading report", body, _STYLE + ITEMS_STYLE)
+    return page(f"{ASSIGNMENT}: grading report", body, _STYLE + ITEMS_STYLE)
 
 
 def _items_section(results, sources) -> str:

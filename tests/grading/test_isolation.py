@@ -708,7 +708,7 @@ def test_cost_of_a_job(mode):
 
 
 # ------------------------------------------------------------------------------------------
-# deadlines the worker cannot move (red-team findings 3b and 10)
+# deadlines the worker cannot move
 
 KEEPALIVE = """
 import json, os, signal, stat, struct, time
