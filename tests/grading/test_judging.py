@@ -64,7 +64,7 @@ def test_score_is_points_times_the_fraction_passed():
 
 
 def test_cases_left_unrun_after_timeouts_read_as_not_run():
-    """Three cases in a row timed out, so the sandbox ran no more (isolation/child.py): the
+    """Three cases in a row timed out, so the sandbox ran no more (isolation/inside/supervisor.py): the
     rest read "not run" with the sandbox's reason, not "raised an error"."""
     why = "not run: the 3 cases before it timed out"
     verdict, reason = judge_case(_ex(close()), CASE, 1.0,
