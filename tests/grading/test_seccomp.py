@@ -362,13 +362,17 @@ def re_names(text: str) -> list[str]:
     return [m for m in re.findall(r"`([a-z_.]+)`", text) if m != "rejected-code"]
 
 
-def test_the_job_carries_the_list_and_the_filter():
+def test_the_job_carries_the_list_the_policy_and_the_filter():
     from autograder.isolation import runner
 
     job = NotebookJob("j", "", [])
     doc = runner._job_document(job, Limits(), True, b"\0" * 16)
     assert doc["modules"] == list(allowlist.ALLOWED_MODULES)
     assert doc["filter"] == "AAAAAAAAAAAAAAAAAAAAAA=="
+    # the grading policy travels in the job: the sandbox program holds none of its own
+    assert doc["policy"]["course_modules"] == ["course_lib", "course_lib.marching_cubes",
+                                               "course_lib.variants"]
+    assert doc["policy"]["off_limits"] == allowlist.OFF_LIMITS
 
 
 # ------------------------------------------------------------------------------------------
