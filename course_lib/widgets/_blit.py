@@ -28,6 +28,7 @@ from matplotlib.layout_engine import PlaceHolderLayoutEngine
 from matplotlib.legend import Legend
 from matplotlib.patches import Patch
 
+from .._private_apis import figure_texts, legend_places_itself, place_title
 from ._locks import figure_lock
 
 __all__ = ["Blitter", "KeptPictures", "SpriteCache"]
@@ -96,9 +97,7 @@ class Blitter:
             if ax.name == "3d":
                 _project_3d(ax, children)
             out.extend(sorted(children, key=lambda a: a.get_zorder()))
-        figure_texts = [getattr(fig, name, None) for name in ("_suptitle", "_supxlabel",
-                                                               "_supylabel")]
-        for text in [*figure_texts, *fig.texts]:  # the suptitle is in fig.texts too
+        for text in [*figure_texts(fig), *fig.texts]:  # the suptitle is in fig.texts too
             if text is not None and text not in out:
                 out.append(text)
         return out
@@ -158,8 +157,7 @@ class Blitter:
                 a.stale = was_stale   # hidden and shown again, it has not changed
         renderer = canvas.get_renderer()
         for ax in fig.axes:  # a hidden title is placed as if it were not there: place it again
-            if hasattr(ax, "_update_title_position"):
-                ax._update_title_position(renderer)
+            place_title(ax, renderer)
         self._signature = self.signature()
         self.full_draws += 1
         return dynamic
@@ -263,7 +261,7 @@ class KeptPictures:
         nor a legend that places itself."""
         if artist.stale or isinstance(artist, Axes):
             return False
-        return not (isinstance(artist, Legend) and artist._loc in (0, "best"))
+        return not (isinstance(artist, Legend) and legend_places_itself(artist))
 
     def get(self, artist):
         """``artist``'s kept picture if still valid, else :attr:`NONE`."""

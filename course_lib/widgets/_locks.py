@@ -32,6 +32,8 @@ import weakref
 import ipywidgets as W
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
+from .._private_apis import message_handler
+
 __all__ = ["ExplorerCanvas", "FairLock", "figure_lock", "mark_live_readouts", "one_at_a_time",
            "one_message_at_a_time"]
 
@@ -126,14 +128,19 @@ def one_message_at_a_time(layout, fig):
         comm = getattr(widget, "comm", None)
         if comm is None:
             continue
-
-        def locked(msg, handle=widget._handle_msg):
-            with lock:
-                handle(msg)
-
-        comm.on_msg(locked)
+        comm.on_msg(_holding(lock, message_handler(widget)))
     mark_live_readouts(layout)
     return layout
+
+
+def _holding(lock, handle):
+    """``handle(msg)`` run holding ``lock``."""
+
+    def locked(msg):
+        with lock:
+            handle(msg)
+
+    return locked
 
 
 def _widgets_in(layout):
