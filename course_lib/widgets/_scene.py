@@ -1,6 +1,6 @@
 """A matplotlib renderer that records what it draws as a scene for the browser to paint.
 
-Issue 15: the explorers' figures answer a slider within a frame or two when the browser, not
+The explorers' figures answer a slider within a frame or two when the browser, not
 the kernel, turns their changing artists into pixels. :class:`SceneRenderer` is a matplotlib
 renderer like Agg's, except that ``draw_path``, ``draw_markers`` and ``draw_image`` record
 their geometry, already in display pixels, instead of rasterising it: matplotlib (and so
