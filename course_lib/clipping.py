@@ -24,9 +24,10 @@ Further tools used by the figures, the explorer and the "going further" section:
     :func:`clip_polygons` (many polygons in one call), :func:`clip_against_plane`,
     :func:`clip_steps` (the polygon after each of the six planes),
     :func:`polygon_area`, :func:`is_convex`, :func:`ear_clip` (triangulation of simple, possibly
-    non-convex polygons), :func:`polygon_spans` (several spans on one scanline),
-    :func:`rasterize_triangle` and :func:`triangle_spans` (a scanline rasteriser with the
-    top-left fill rule).
+    non-convex polygons), :func:`polygon_spans` (several spans on one scanline), written in
+    :mod:`course_lib._polygons`; :func:`rasterize_triangle` and :func:`triangle_spans` (a
+    scanline rasteriser with the top-left fill rule), written in :mod:`course_lib._raster`.
+    All are imported from here.
 
 Speed
 -----
@@ -56,6 +57,8 @@ import math
 
 import numpy as np
 
+from ._polygons import ear_clip, is_convex, polygon_area, polygon_spans, shoelace_area
+from ._raster import rasterize_triangle, triangle_spans
 from ._validate import as_float_array, as_int, as_points, as_scalar, as_vectors
 
 __all__ = [
@@ -381,11 +384,7 @@ def screen_area(P_screen) -> float:
         raise ValueError(f"P_screen must have shape (n, 3) or (n, 2), got shape {P.shape}")
     if len(P) < 3:
         return 0.0
-    x, y = P[:, 0], P[:, 1]
-    # Shift to the centroid first: the same sum, with far less cancellation.
-    x = x - x.mean()
-    y = y - y.mean()
-    return float(0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+    return shoelace_area(P[:, 0], P[:, 1])
 
 
 def fan_triangulate(m) -> np.ndarray:
@@ -813,251 +812,3 @@ def _clip_rows(V, size):
         V = out
     return V
 
-
-# ------------------------------------------------------------------------------------------------
-# 2-D polygons: area, convexity, ear clipping, spans
-
-
-def _polygon2(poly_xy, name="poly_xy", min_count=3) -> np.ndarray:
-    return as_points(poly_xy, 2, name, min_count=min_count)
-
-
-def polygon_area(poly_xy) -> float:
-    """Signed (shoelace) area of a 2-D polygon: positive when anticlockwise.
-
-    Parameters
-    ----------
-    poly_xy : array_like, shape (n, 2), n >= 3
-
-    Returns
-    -------
-    float
-    """
-    return screen_area(_polygon2(poly_xy))
-
-
-def _cross(o, a, b):
-    """z-component of ``(a - o) x (b - o)``, broadcasting over leading axes."""
-    return (a[..., 0] - o[..., 0]) * (b[..., 1] - o[..., 1]) - \
-        (a[..., 1] - o[..., 1]) * (b[..., 0] - o[..., 0])
-
-
-def is_convex(poly_xy) -> bool:
-    """True when a 2-D polygon is convex (all turns the same way, collinear turns allowed).
-
-    Parameters
-    ----------
-    poly_xy : array_like, shape (n, 2), n >= 3
-
-    Returns
-    -------
-    bool
-
-    Notes
-    -----
-    Checks the sign of every turn and that the boundary winds around exactly once (the turning
-    angles add up to +-2 pi), which rules out self-intersecting "stars" whose turns all agree.
-    """
-    p = _polygon2(poly_xy)
-    prev, nxt = np.roll(p, 1, axis=0), np.roll(p, -1, axis=0)
-    turn = _cross(prev, p, nxt)
-    scale = np.max(np.abs(p - p.mean(axis=0))) ** 2
-    turn = np.where(np.abs(turn) <= 1e-12 * scale, 0.0, turn)
-    if np.any(turn > 0) and np.any(turn < 0):
-        return False
-    e = nxt - p
-    ang = np.arctan2(e[:, 1], e[:, 0])
-    dtheta = np.angle(np.exp(1j * (np.roll(ang, -1) - ang)))
-    return bool(abs(abs(dtheta.sum()) - 2 * np.pi) < 1e-6)
-
-
-def ear_clip(poly_xy) -> np.ndarray:
-    """Triangulate a simple (possibly non-convex) 2-D polygon by ear clipping (Q6(c), further).
-
-    Parameters
-    ----------
-    poly_xy : array_like, shape (n, 2), n >= 3
-        Vertices of a simple polygon (no self-intersections, no holes), either orientation.
-
-    Returns
-    -------
-    triangles : ndarray of int, shape (n - 2, 3)
-        Indices into ``poly_xy``; each triangle has the polygon's orientation and together they
-        cover it exactly once, so their areas sum to the polygon's area.
-
-    Raises
-    ------
-    ValueError
-        If ``poly_xy`` is not ``(n, 2)`` with ``n >= 3``, or has zero area.
-
-    Notes
-    -----
-    Every simple polygon with more than three vertices has at least two *ears* (Meisters' two
-    ears theorem): convex vertices whose triangle with their two neighbours contains no other
-    vertex. Cutting an ear off leaves a simple polygon with one vertex fewer, so ``n - 2``
-    cuts triangulate it, in ``O(n^2)`` tests at most per cut here (each vectorised over the
-    remaining vertices). A vertex whose neighbours are collinear with it is cut as a
-    zero-area triangle when no proper ear is left, which keeps the count at ``n - 2``.
-    """
-    p = _polygon2(poly_xy)
-    n = len(p)
-    area = polygon_area(p)
-    scale = np.max(np.abs(p - p.mean(axis=0))) ** 2
-    if abs(area) <= 1e-14 * max(scale, np.finfo(float).tiny):
-        raise ValueError("poly_xy has zero area, so it cannot be triangulated")
-    sign = 1.0 if area > 0 else -1.0
-    tol = 1e-12 * scale
-    idx = list(range(n))
-    tris = []
-    while len(idx) > 3:
-        m = len(idx)
-        q = p[idx]
-        prev, nxt = np.roll(q, 1, axis=0), np.roll(q, -1, axis=0)
-        turn = sign * _cross(prev, q, nxt)
-        cut = None
-        for k in np.flatnonzero(turn > tol):
-            a, b, c = q[k - 1], q[k], q[(k + 1) % m]
-            others = np.delete(np.arange(m), [(k - 1) % m, k, (k + 1) % m])
-            r = q[others]
-            # Any other vertex inside or on the candidate triangle blocks the ear (vertices that
-            # coincide with a, b or c are ignored: they touch the ear only at a corner).
-            dup = (np.all(r == a, axis=1) | np.all(r == b, axis=1) | np.all(r == c, axis=1))
-            r = r[~dup]
-            ab = sign * _cross(a, b, r)
-            bc = sign * _cross(b, c, r)
-            ca = sign * _cross(c, a, r)
-            if not np.any((ab >= -tol) & (bc >= -tol) & (ca >= -tol)):
-                cut = k
-                break
-        if cut is None:
-            # Only (numerically) collinear or reflex vertices remain: drop the flattest one.
-            cut = int(np.argmin(np.abs(turn)))
-        tris.append((idx[cut - 1], idx[cut], idx[(cut + 1) % m]))
-        del idx[cut]
-    tris.append(tuple(idx))
-    return np.array(tris, dtype=np.intp)
-
-
-def polygon_spans(poly_xy, y) -> list[tuple[float, float]]:
-    """All spans of a 2-D polygon on the scanline at height ``y`` (even-odd rule; Q6(c)).
-
-    Parameters
-    ----------
-    poly_xy : array_like, shape (n, 2), n >= 3
-    y : float
-
-    Returns
-    -------
-    spans : list of (x_left, x_right)
-        Disjoint intervals sorted by ``x``; empty when the line misses the polygon.
-
-    Notes
-    -----
-    The crossings of the line with the edges are sorted and paired: inside runs from the 1st
-    crossing to the 2nd, the 3rd to the 4th, ... Each edge is treated as half-open in ``y``
-    (its lower end counts, its upper end does not) so a vertex is never counted twice and
-    horizontal edges add nothing. A convex polygon gives at most one span; a non-convex one
-    can give several, which a rasteriser has to sort: the reason Q6(c) splits polygons into
-    triangles.
-    """
-    p = _polygon2(poly_xy)
-    y = as_scalar(y, "y")
-    a, b = p, np.roll(p, -1, axis=0)
-    lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
-    hit = (lo <= y) & (y < hi)
-    a, b = a[hit], b[hit]
-    xs = np.sort(a[:, 0] + (y - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1]))
-    return [(float(xs[i]), float(xs[i + 1])) for i in range(0, len(xs) - 1, 2)
-            if xs[i + 1] > xs[i]]
-
-
-# ------------------------------------------------------------------------------------------------
-# a small scanline rasteriser
-
-
-def rasterize_triangle(tri_xy, width, height) -> np.ndarray:
-    """Pixels covered by a triangle, with the top-left fill rule (Q6(c), further).
-
-    Parameters
-    ----------
-    tri_xy : array_like, shape (3, 2)
-        Vertices in pixel coordinates: ``x`` to the right, ``y`` *down* (row index), pixel
-        ``(row, col)`` having its centre at ``(col + 0.5, row + 0.5)``.
-    width, height : int
-        Size of the raster, at least 1.
-
-    Returns
-    -------
-    mask : ndarray of bool, shape (height, width)
-        True for the pixels whose centre the triangle covers.
-
-    Notes
-    -----
-    A pixel centre ``p`` is inside when the three edge functions
-    ``E_ab(p) = (b - a) x (p - a)`` (vertices ordered to give a positive area) are all
-    positive. A centre exactly on an edge is given to the triangle only when the edge is a
-    *top* edge (horizontal, with the triangle below it) or a *left* edge (going up the screen
-    in this ordering), as in Direct3D and OpenGL. With that rule two triangles that share an
-    edge never both draw, nor both miss, a pixel centre on it: every pixel of a mesh is drawn
-    exactly once. Degenerate (zero-area) triangles cover nothing. Each row of the result is a
-    single run of pixels (:func:`triangle_spans`), because a triangle is convex.
-    """
-    tri = as_points(tri_xy, 2, "tri_xy")
-    if tri.shape[0] != 3:
-        raise ValueError(f"tri_xy must have shape (3, 2), got shape {tri.shape}")
-    width = as_int(width, "width", minimum=1)
-    height = as_int(height, "height", minimum=1)
-    mask = np.zeros((height, width), dtype=bool)
-    area2 = _cross(tri[0], tri[1], tri[2])
-    if area2 == 0:
-        return mask
-    if area2 < 0:
-        tri = tri[[0, 2, 1]]
-    # Only the bounding box needs testing.
-    c0 = max(int(np.floor(tri[:, 0].min() - 0.5)), 0)
-    c1 = min(int(np.ceil(tri[:, 0].max() - 0.5)), width - 1)
-    r0 = max(int(np.floor(tri[:, 1].min() - 0.5)), 0)
-    r1 = min(int(np.ceil(tri[:, 1].max() - 0.5)), height - 1)
-    if c0 > c1 or r0 > r1:
-        return mask
-    px = np.arange(c0, c1 + 1) + 0.5
-    py = np.arange(r0, r1 + 1)[:, None] + 0.5
-    inside = np.ones((r1 - r0 + 1, c1 - c0 + 1), dtype=bool)
-    for i in range(3):
-        a, b = tri[i], tri[(i + 1) % 3]
-        dx, dy = b[0] - a[0], b[1] - a[1]
-        e = dx * (py - a[1]) - dy * (px - a[0])
-        top_left = (dy == 0 and dx > 0) or dy < 0
-        inside &= (e >= 0) if top_left else (e > 0)
-    mask[r0:r1 + 1, c0:c1 + 1] = inside
-    return mask
-
-
-def triangle_spans(tri_xy, width, height) -> np.ndarray:
-    """The pixel runs of a rasterised triangle, one per scanline (Q6(c), further).
-
-    Parameters
-    ----------
-    tri_xy : array_like, shape (3, 2)
-        Vertices in pixel coordinates (``y`` down), as for :func:`rasterize_triangle`.
-    width, height : int
-
-    Returns
-    -------
-    spans : ndarray of int, shape (k, 3)
-        Rows ``(row, first_col, last_col)`` (inclusive), one per scanline the triangle covers,
-        in increasing ``row``.
-
-    Notes
-    -----
-    Built from :func:`rasterize_triangle`. That each covered row is a single run of pixels is
-    the property Q6(c) relies on (a triangle is convex); it is asserted as the spans are read.
-    """
-    mask = rasterize_triangle(tri_xy, width, height)
-    rows = np.flatnonzero(mask.any(axis=1))
-    spans = np.empty((len(rows), 3), dtype=np.intp)
-    for k, r in enumerate(rows):
-        cols = np.flatnonzero(mask[r])
-        spans[k] = r, cols[0], cols[-1]
-        assert cols[-1] - cols[0] + 1 == len(cols), "a triangle row must be one run"
-    return spans

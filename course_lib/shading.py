@@ -100,7 +100,7 @@ def normalize(v) -> np.ndarray:
 
     Examples
     --------
-    >>> normalize([1.0, -1.0, 1.0])  # doctest: +SKIP
+    >>> normalize([1.0, -1.0, 1.0])
     array([ 0.57735027, -0.57735027,  0.57735027])
     """
     arr = as_float_array(v, "v")
@@ -138,7 +138,7 @@ def reflect(L, N) -> np.ndarray:
 
     Examples
     --------
-    >>> reflect([1.0, 1.0, 0.0], [0.0, 1.0, 0.0])  # doctest: +SKIP
+    >>> reflect([1.0, 1.0, 0.0], [0.0, 1.0, 0.0])
     array([-1.,  1.,  0.])
     """
     L = as_vectors(L, 3, "L")
@@ -290,7 +290,7 @@ def phong(colour, Ia, ka, Ip, kd, ks, n, L, N, V) -> np.ndarray:
     ``n = 10``, a blue surface with ``Ia ka = Ip kd = 0.5`` and ``Ip ks = 1``:
 
     >>> phong((0, 0, 1), 1, 0.5, 1, 0.5, 1, 10, (1, -1, 1),
-    ...       (0, 0.5, 3 ** 0.5 / 2), (0, 1, 0)).round(4)  # doctest: +SKIP
+    ...       (0, 0.5, 3 ** 0.5 / 2), (0, 1, 0)).round(4)
     array([0.0931, 0.0931, 0.6988])
     """
     return _shade(colour, Ia, ka, Ip, kd, ks, n, L, N, V, "phong")

@@ -1,4 +1,4 @@
-"""Your own numbers: the per-student variant of every graded number item (issue 11).
+"""Your own numbers: the per-student variant of every graded number item.
 
 Each notebook works the exam's own numbers as its example, and asks the graded number items on
 numbers of the student's own. Those numbers, and the order in which each multiple-choice item

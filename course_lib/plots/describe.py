@@ -19,6 +19,8 @@ from matplotlib.collections import LineCollection, PathCollection, QuadMesh
 from matplotlib.container import BarContainer
 from matplotlib.patches import Rectangle
 
+from .._private_apis import colorbar_of, segments_3d, suptitle_text
+
 __all__ = ["alt_text", "describe_axes", "num", "set_summary", "summary"]
 
 #: most curves, texts or bars named per panel (a longer list is summed up by its count)
@@ -58,7 +60,7 @@ def alt_text(fig) -> str:
     panel described from its artists."""
     axes = [ax for ax in fig.axes if ax.get_visible() and not _is_colourbar(ax)]
     parts = [summary(fig)]
-    title = fig._suptitle.get_text() if getattr(fig, "_suptitle", None) else ""
+    title = suptitle_text(fig)
     if title:
         parts.append(f"Figure: {_clean(title)}.")
     for i, ax in enumerate(axes):
@@ -77,11 +79,11 @@ def _clean(text: str) -> str:
 
 
 def _is_colourbar(ax) -> bool:
-    return getattr(ax, "_colorbar", None) is not None
+    return colorbar_of(ax) is not None
 
 
 def _colourbar(ax) -> str:
-    cb = ax._colorbar
+    cb = colorbar_of(ax)
     label = _clean(cb.ax.get_ylabel() or cb.ax.get_xlabel()) or "value"
     lo, hi = cb.norm.vmin, cb.norm.vmax
     if lo is None or hi is None:
@@ -197,7 +199,7 @@ def _collection(c) -> str:
     if isinstance(c, QuadMesh):
         arr = np.asarray(c.get_array(), dtype=float)
         return f"a colour-mapped grid{name} of values {num(np.nanmin(arr))} to {num(np.nanmax(arr))}"
-    faces = getattr(c, "_segments3d", None)     # a 3-D collection has no 2-D paths until drawn
+    faces = segments_3d(c)     # a 3-D collection has no 2-D paths until drawn
     n = len(faces) if faces is not None else len(c.get_paths())
     kind = "line segments" if isinstance(c, LineCollection) else "filled shapes"
     return f"{n} {kind}{name}" if n else ""

@@ -1,7 +1,7 @@
 """The explorers' figure in the browser: a ``<canvas>`` that paints the kernel's scenes.
 
 :class:`FigureCanvas` is an `anywidget <https://anywidget.dev>`_ widget (JupyterLab, Notebook 7,
-VS Code, Colab). The kernel sends it two things (issue 15):
+VS Code, Colab). The kernel sends it two things:
 
 * ``background``: a PNG of the figure without its changing artists (axes, ticks, labels,
   grids), drawn by Agg when the figure's geometry changes (rarely: a new axis range);

@@ -1,6 +1,6 @@
 """A matplotlib renderer that records what it draws as a scene for the browser to paint.
 
-Issue 15: the explorers' figures answer a slider within a frame or two when the browser, not
+The explorers' figures answer a slider within a frame or two when the browser, not
 the kernel, turns their changing artists into pixels. :class:`SceneRenderer` is a matplotlib
 renderer like Agg's, except that ``draw_path``, ``draw_markers`` and ``draw_image`` record
 their geometry, already in display pixels, instead of rasterising it: matplotlib (and so
@@ -40,10 +40,7 @@ from matplotlib.backend_bases import RendererBase
 from matplotlib.path import Path
 from matplotlib.transforms import Affine2D
 
-try:  # Text's cache of text metrics, keyed by renderer (private to matplotlib)
-    from matplotlib.text import _get_text_metrics_with_cache as _text_metrics
-except ImportError:  # pragma: no cover - a matplotlib without it
-    _text_metrics = None
+from .._private_apis import cached_text_width, clip_gc, font_of, scalar_alpha, text_to_path
 
 __all__ = ["SceneRenderer", "pack", "unpack"]
 
@@ -157,7 +154,7 @@ class SceneRenderer(RendererBase):
         path, width = self._outline(s, prop, mtext)
         if path is None:
             return
-        scale = self.points_to_pixels(prop.get_size_in_points()) / self._text2path.FONT_SCALE
+        scale = self.points_to_pixels(prop.get_size_in_points()) / text_to_path(self).FONT_SCALE
         stretch = 1.0
         agg_width = self._agg_width(s, prop)
         if width > 0 and agg_width > 0:
@@ -170,11 +167,9 @@ class SceneRenderer(RendererBase):
 
     def _agg_width(self, s, prop) -> float:
         """The width (pixels) Agg gives ``s``: from the cache that ``Text`` layout filled."""
-        if _text_metrics is not None:
-            try:
-                return float(_text_metrics(self, s, prop, False, self.dpi)[0])
-            except TypeError:  # another signature than matplotlib 3.7-3.11's
-                pass
+        width = cached_text_width(self, s, prop, self.dpi)
+        if width is not None:
+            return width
         return float(self.get_text_width_height_descent(s, prop, False)[0])
 
     def _outline(self, s, prop, mtext):
@@ -189,8 +184,8 @@ class SceneRenderer(RendererBase):
         key = (s, hash(prop), repr(sorted(extra.items())))
         entry = self._outlines.pop(key, None)
         if entry is None:
-            text2path = self._text2path
-            font = text2path._get_font(prop)
+            text2path = text_to_path(self)
+            font = font_of(text2path, prop)
             glyphs, new, _ = text2path.get_glyphs_with_font(
                 font, s, glyph_map=self._glyphs, return_new_glyphs_only=True, **extra)
             self._glyphs.update(new)
@@ -332,8 +327,8 @@ class SceneRenderer(RendererBase):
             image.draw(self)
             return
         gc = self.new_gc()
-        image._set_gc_clip(gc)
-        gc.set_alpha(image._get_scalar_alpha())
+        clip_gc(image, gc)
+        gc.set_alpha(scalar_alpha(image))
         im, l, b, trans = image.make_image(self, unsampled=True)
         if im is not None:
             trans = Affine2D().scale(im.shape[1], im.shape[0]) + trans

@@ -33,6 +33,8 @@ from __future__ import annotations
 import time
 from collections import deque
 
+from .._private_apis import set_from_page
+
 #: how long after the kernel set a value its echo may still arrive (the page sends it when it
 #: receives the value; the kernel reads it after the messages queued before it: a second or
 #: so behind a drag on a loaded machine). A student's move within this time to within half a
@@ -50,13 +52,9 @@ MOVE, ECHO, STALE = "move", "echo", "stale"
 
 
 def from_page(slider) -> bool:
-    """Whether the change of ``slider.value`` being observed came from the page.
-
-    ipywidgets sets a value received from the page inside ``_lock_property`` and fires the
-    observers before releasing it (documented in ``Widget.set_state``: "Properties must be
-    locked when the hold_trait_notification context manager is released and notifications
-    are fired"); a value set in the kernel is not locked."""
-    return "value" in getattr(slider, "_property_lock", {})
+    """Whether the change of ``slider.value`` being observed came from the page (a value
+    received from the page is locked while its observers run; one set in the kernel is not)."""
+    return set_from_page(slider, "value")
 
 
 class SliderEchoes:

@@ -5,7 +5,7 @@ right, bottom, top, near, far); a drop-down picks a vertex and four sliders move
 homogeneous coordinates ``[X, Y, Z, w]`` (so you can watch a vertex go behind the eye, ``w < 0``,
 and see the naive divide throw it in front). The left panel is 3-D screen space with the view
 volume and the plane being applied; the right panel looks along one screen axis. All artists are
-updated in place and painted by the browser (:mod:`course_lib.widgets._view`, issue 15): the
+updated in place and painted by the browser (:mod:`course_lib.widgets._view`): the
 2-D panel's axes stay cached and the 3-D panel's contents are projected and sent again, to be
 drawn over its cached panes and ticks.
 
@@ -82,7 +82,7 @@ class ClippingExplorer:
         self.dims = tuple(dims)
         self.steps = clipping.clip_steps(self.P)
         self.last_update_ms = 0.0
-        self._view = FigureView()                  # painted by the browser (issue 15)
+        self._view = FigureView()                  # painted by the browser
         self._syncing = False
         self._echoes = SliderEchoes()
 

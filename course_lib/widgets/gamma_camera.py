@@ -26,8 +26,8 @@ open, 0.25 %.
 Every change calls :meth:`CollimatorExplorer.update`, which replaces the paths and colour values
 of the existing hole collections (``set_paths``, ``set_array``), moves the circles, rectangles
 and lines (``set_radius``, ``set_bounds``, ``set_data``) and redraws; no artist is created.
-The browser paints what changed over the cached axes (:mod:`course_lib.widgets._view`,
-issue 15). A change of an axes' limits means drawing its ticks again with Agg (a new
+The browser paints what changed over the cached axes (:mod:`course_lib.widgets._view`).
+A change of an axes' limits means drawing its ticks again with Agg (a new
 background, the one costly kind of update), so: a move of ``d``, ``L`` or ``z`` never changes
 them (the side view keeps its data in mm and fits them into fixed axes with one scaling,
 ``side_limits`` holding the mm shown; it has no ticks, its labels give the sizes), and a move

@@ -11,7 +11,7 @@ Choose a case three ways: Lorensen's number (one of the 15 classes, Q3(b)), the 
 0 ... 255, or the eight corner toggles; the three stay in step. Every change calls
 :meth:`CaseExplorer.update`, which moves the existing artists (``set_verts`` on the triangles,
 marker colours on the corners) and redraws: the browser paints the projected triangles and
-corners over the cached 3-D panes and ticks (:mod:`course_lib.widgets._view`, issue 15).
+corners over the cached 3-D panes and ticks (:mod:`course_lib.widgets._view`).
 
 In a notebook (any matplotlib backend)::
 

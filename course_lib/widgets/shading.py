@@ -12,7 +12,7 @@ since a slider can show the light's elevation of 35.26 degrees only to its step)
 
 Every change calls :meth:`PhongExplorer.update`, which re-renders into the existing images with
 ``set_data`` (two 128 x 128 renders, a few milliseconds) and moves the markers. The browser
-paints the figure (:mod:`course_lib.widgets._view`, issue 15): the axes frames and titles stay
+paints the figure (:mod:`course_lib.widgets._view`): the axes frames and titles stay
 cached, and only the two images (at 128 x 128, scaled by the page), the markers and the legend
 are sent again.
 

@@ -10,7 +10,7 @@ the control points, and it writes the formulas of ``p``, ``p'`` and ``p''`` for 
 Control points move by dragging them on the figure or with the point selector and its two
 sliders. Every change calls :meth:`update`, which moves the existing artists (``set_data``,
 ``set_xy``, ``set_positions``) and redraws: the browser paints the changed artists over the
-cached axes, grid and ticks (:mod:`course_lib.widgets._view`, issue 15), so a dragged point
+cached axes, grid and ticks (:mod:`course_lib.widgets._view`), so a dragged point
 follows the mouse.
 
 In a notebook (any matplotlib backend)::

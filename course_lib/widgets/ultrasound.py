@@ -3,7 +3,7 @@
 Built from explicit ipywidgets controls with ``.observe`` callbacks (no ``interact``): the
 figure is drawn once and :meth:`BScanExplorer.update` changes its artists in place
 (``AxesImage.set_data``, ``Line2D.set_data``), under any matplotlib backend. The browser paints
-the figure (:mod:`course_lib.widgets._view`, issue 15): axes, ticks and labels stay cached, and
+the figure (:mod:`course_lib.widgets._view`): axes, ticks and labels stay cached, and
 only the image (at its own resolution, scaled by the page), the outlines and the A-lines are
 sent again; the displayed block heights are a text readout under the figure, sent after it
 (text that changes in the figure would be laid out and outlined in the kernel on every move).
@@ -93,7 +93,7 @@ class BScanExplorer:
             w.observe(self._on_change, names="value")
         left = widgets.VBox(self.controls[:3] + [self.freq])
         right = widgets.VBox(self.controls[3:6] + [self.tgc])
-        self._view = FigureView()                  # painted by the browser (issue 15)
+        self._view = FigureView()                  # painted by the browser
         view = self._view.widget(self.fig)
         self.widget = one_message_at_a_time(
             widgets.VBox([widgets.HBox([left, right]), view, self.readout]), self.fig)

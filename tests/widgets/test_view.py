@@ -20,7 +20,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 
-from course_lib.widgets import _view  # noqa: E402
+from course_lib.widgets import _blit, _view  # noqa: E402
 from course_lib.widgets.clipping import ClippingExplorer  # noqa: E402
 from course_lib.widgets.gamma_camera import CollimatorExplorer  # noqa: E402
 from course_lib.widgets.marching_cubes import CaseExplorer  # noqa: E402
@@ -36,7 +36,7 @@ def headless(monkeypatch):
     Earlier tests in the same worker (the browser tests' Playwright session) may leave an
     asyncio loop marked running in this thread; the explorers would then defer frames onto it.
     The one test of deferring runs its own loop in a thread of its own."""
-    monkeypatch.setattr(_view, "_running_loop", lambda: None)
+    monkeypatch.setattr(_blit, "_running_loop", lambda: None)
 
 #: explorer, then the (control attribute, new value) moves applied one update at a time
 MOVES = {
@@ -218,7 +218,7 @@ def test_updates_faster_than_frames_are_shown_by_one_later_frame():
     import threading
 
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(_view, "_running_loop", _running_loop_of_this_thread)
+        mp.setattr(_blit, "_running_loop", _running_loop_of_this_thread)
         failed = []
         thread = threading.Thread(target=lambda: _record(kernel, failed))
         thread.start()
@@ -375,7 +375,7 @@ def test_a_figure_saved_before_a_put_off_frame_leaves_that_frame_right(name):
         await asyncio.sleep(0.6)                           # the put-off frame is drawn
 
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(_view, "_running_loop", _running_loop_of_this_thread)
+        mp.setattr(_blit, "_running_loop", _running_loop_of_this_thread)
         failed = []
         thread = threading.Thread(target=lambda: _record(lambda: asyncio.run(move_then_save()),
                                                          failed))
