@@ -33,7 +33,8 @@ import importlib, inspect, io, os, pickle, pkgutil, signal, sys, warnings
 import numpy as np
 warnings.simplefilter("ignore")
 os.environ.setdefault("MPLBACKEND", "Agg")
-cases_path, out_path = sys.argv[1], sys.argv[2]
+cases_path, out_path, package = sys.argv[1:4]
+sys.path[:0] = sys.argv[4:]             # a forged copy's folder (the probe's own tests)
 with open(cases_path, "rb") as f:
     cases = pickle.load(f)              # {exercise: [(args, kwargs, expected plain data)]}
 
@@ -62,19 +63,19 @@ def _screen(expected, got):
     return (e is not None and g is not None and e.shape == g.shape
             and bool(np.allclose(g, e, rtol=1e-3, atol=1e-6, equal_nan=True)))
 
-import course_lib
+root = importlib.import_module(package)
 modules, broken = [], {}
-for info in pkgutil.walk_packages(course_lib.__path__, "course_lib."):
+for info in pkgutil.walk_packages(root.__path__, package + "."):
     try:
         modules.append(importlib.import_module(info.name))
     except BaseException as exc:
         broken[info.name] = repr(exc)[:200]
-modules.insert(0, course_lib)
+modules.insert(0, root)
 
 def _callables(module):
     for name, obj in sorted(vars(module).items()):
         owner = getattr(obj, "__module__", "") or ""
-        if not owner.startswith("course_lib"):
+        if not (owner == package or owner.startswith(package + ".")):
             continue
         if inspect.isclass(obj):
             for attr, raw in sorted(vars(obj).items()):
@@ -154,8 +155,10 @@ def probe_cases(student: str = "wheel-probe") -> dict:
 
 
 def find_answers(python: str | Path, workdir: Path, env: dict | None = None,
-                 timeout: int = 1500) -> dict:
-    """Run the probe with ``python`` from ``workdir``: ``{"answers": {exercise: [callables that
+                 timeout: int = 1500, package: str = "course_lib",
+                 path: tuple[str, ...] = ()) -> dict:
+    """Run the probe on ``package`` with ``python`` from ``workdir`` (``path``: folders put
+    first on its ``sys.path``): ``{"answers": {exercise: [callables that
     answer it]}, "broken": {module: error}, "modules": [...], "callables": n, "calls": n}``."""
     from autograder.exercises import REGISTRY
 
@@ -166,7 +169,8 @@ def find_answers(python: str | Path, workdir: Path, env: dict | None = None,
             for name, rows in cases.items()}
     (workdir / "cases.pkl").write_bytes(pickle.dumps(sent))
     env = dict(os.environ if env is None else env, MPLBACKEND="Agg")
-    proc = subprocess.run([str(python), "-I", "-c", STUDENT_SIDE, "cases.pkl", "found.pkl"],
+    proc = subprocess.run([str(python), "-I", "-c", STUDENT_SIDE, "cases.pkl", "found.pkl",
+                           package, *map(str, path)],
                           cwd=workdir, env=env, capture_output=True, text=True,
                           timeout=timeout, check=False, stdin=subprocess.DEVNULL)
     if proc.returncode != 0 or not (workdir / "found.pkl").exists():
