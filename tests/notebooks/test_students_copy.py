@@ -8,8 +8,9 @@ own comparison rule:
   that compute a reference's answer under other names, and not a readout rounded to display
   precision nor a routine that only draws;
 - on the instructors' copy it finds every graded function's reference (its oracle);
-- on the students' wheel it must find nothing: not yet (the explorers and figures still compute
-  with the references; docs/students-copy.md lists the plan), so that test is a strict xfail.
+- on the students' wheel it finds none of the graded functions the wheel leaves out, and only
+  those an explorer or figure still computes with (``student_bundle.STILL_SHIPPED``); that it
+  finds nothing at all is the goal (docs/students-copy.md), a strict xfail until then.
 """
 
 from __future__ import annotations
@@ -76,14 +77,35 @@ def test_probe_finds_every_reference_in_the_instructors_copy(tmp_path):
         assert f"{ref.__module__}.{ref.__qualname__}" in result["answers"].get(name, []), name
 
 
-@pytest.mark.slow
-@pytest.mark.xdist_group("student_env")
-@pytest.mark.skipif(shutil.which("gcc") is None, reason="no C compiler (make wheel-deps)")
-@pytest.mark.xfail(strict=True, reason="the students' wheel still carries the references the "
-                   "explorers and figures compute with: docs/students-copy.md, 'Not done yet'")
-def test_students_wheel_answers_no_graded_function(tmp_path):
+@pytest.fixture(scope="module")
+def wheel_answers(tmp_path_factory):
+    """The probe's result in the students' environment (their wheel alone)."""
+    if shutil.which("gcc") is None:
+        pytest.skip("no C compiler (make wheel-deps)")
     import studentenv
 
-    result = wheelprobe.find_answers(studentenv.python(), tmp_path, env=studentenv.env_vars())
+    result = wheelprobe.find_answers(studentenv.python(), tmp_path_factory.mktemp("probe"),
+                                     env=studentenv.env_vars())
     assert result["broken"] == {}, result["broken"]
-    assert result["answers"] == {}, wheelprobe.summary(result)
+    return result
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("student_env")
+def test_students_wheel_answers_only_what_its_explorers_still_need(wheel_answers):
+    """No callable of the wheel answers a left-out graded function; the ones it still answers
+    are exactly :data:`~autograder.student_bundle.STILL_SHIPPED` (shrink it with the plan)."""
+    from autograder import student_bundle
+
+    withheld = {n for names in student_bundle.withheld_functions().values() for n in names}
+    answered = {REGISTRY[name].reference.__qualname__ for name in wheel_answers["answers"]}
+    assert withheld and not answered & withheld, wheelprobe.summary(wheel_answers)
+    assert answered == set(student_bundle.STILL_SHIPPED), wheelprobe.summary(wheel_answers)
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("student_env")
+@pytest.mark.xfail(strict=True, reason="the students' wheel still carries the references the "
+                   "explorers and figures compute with: docs/students-copy.md, 'Not done yet'")
+def test_students_wheel_answers_no_graded_function(wheel_answers):
+    assert wheel_answers["answers"] == {}, wheelprobe.summary(wheel_answers)
