@@ -157,18 +157,25 @@ def without_functions(text: str, names) -> str:
             start, end = start - (listing[1] - listing[0]), end - (listing[1] - listing[0])
         del lines[start - 1:end]
     out = "".join(lines)
-    left = set()
-    for node in ast.walk(ast.parse(out)):
-        if isinstance(node, ast.Name):
-            left.add(node.id)
-        elif isinstance(node, ast.Attribute):
-            left.add(node.attr)
-        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
-            left.add(node.value)
-    still = sorted(names & left)
+    still = sorted(names & names_used(out))
     if still:
         raise ValueError(f"{still} left out but still named in the module")
     return out
+
+
+def names_used(text: str) -> set[str]:
+    """Every name a module's source uses: names, attributes, imported names, whole strings."""
+    used = set()
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, ast.Name):
+            used.add(node.id)
+        elif isinstance(node, ast.Attribute):
+            used.add(node.attr)
+        elif isinstance(node, ast.alias):
+            used.add(node.name.rpartition(".")[2])
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            used.add(node.value)
+    return used
 
 
 def library_packages() -> list[str]:
@@ -256,11 +263,15 @@ def pyproject_text(version: str) -> str:
 def stage_sources(stage: Path, digest: str) -> Path:
     """Fill ``stage`` with what ``pip wheel`` builds from: the library, setup, metadata."""
     withheld = withheld_functions()
+    gone = {name for names in withheld.values() for name in names}
     for rel in library_files():
         (stage / rel).parent.mkdir(parents=True, exist_ok=True)
         text = (REPO_ROOT / rel).read_text(encoding="utf-8")
         if module_name(rel) in withheld:
             text = without_functions(text, withheld[module_name(rel)])
+        elif gone & names_used(text):   # e.g. a re-export of a function left out elsewhere
+            raise ValueError(f"{rel} names {sorted(gone & names_used(text))}, which the "
+                             "students' wheel leaves out")
         (stage / rel).write_text(text, encoding="utf-8")
     shutil.copyfile(SETUP_SCRIPT, stage / "setup.py")
     (stage / "bundle.json").write_text(json.dumps(bundle_spec(), indent=1))
