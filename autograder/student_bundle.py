@@ -23,8 +23,10 @@ which is what ``make lab`` opens (``.venv-student/``) and what the tests execute
 
 from __future__ import annotations
 
+import ast
 import hashlib
 import importlib.metadata
+import re
 import json
 import os
 import shutil
@@ -47,6 +49,20 @@ DIST_NAME = "4f9-course-student"
 #: call (it holds no key: the grader alone does), and each student's numbers and order of
 #: options (a pure function of the id; no answers)
 SHIPPED_AS_SOURCE = ("course_lib.answers", "course_lib.variants")
+#: graded functions (by qualified name) the students' wheel still carries, because an
+#: explorer, a figure or a release notebook's cell computes with them; every other graded
+#: function's reference is left out of the wheel (:func:`withheld_functions`).
+#: docs/students-copy.md gives the plan that empties this set.
+STILL_SHIPPED = frozenset({
+    "displayed_thickness",                                               # q1 B-scan explorer
+    "collimator_resolution", "open_fraction", "pmt_gain", "ring_hole_positions",  # q2
+    "cube_index", "interpolate_edge", "marching_cubes",                   # q3 marching cubes
+    "is_closed_consistent", "mesh_volume", "triangle_projected_volume",   # q3 volume figures
+    "end_derivatives", "end_rows", "parameter_row", "phantom_point",      # q4 explorer, figures
+    "catmull_rom_basis", "bspline_basis",                                 # q4 splines.basis
+    "normalize", "reflect", "halfway", "phong", "blinn_phong",            # q5 Phong explorer
+    "clip_polygon", "fan_triangulate", "inside_view_volume", "screen_area", "to_screen",  # q6
+})
 #: the instructors' requirements a student's environment needs (versions come from our own
 #: package metadata, so the two never disagree)
 STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "anywidget", "jupyterlab",
@@ -93,6 +109,73 @@ def compiled_modules() -> list[str]:
     """Dotted names of the modules the wheel carries only as compiled extensions."""
     return [module_name(p) for p in library_files()
             if p.name != "__init__.py" and module_name(p) not in SHIPPED_AS_SOURCE]
+
+
+def withheld_functions() -> dict[str, tuple[str, ...]]:
+    """``{module: (function, ...)}``: the graded functions' references the students' wheel
+    leaves out (every graded function of the registry but :data:`STILL_SHIPPED`)."""
+    from .exercises import REGISTRY
+
+    out: dict[str, set[str]] = {}
+    for ex in REGISTRY.values():
+        ref = ex.reference
+        if ex.kind == "function" and ref.__qualname__ not in STILL_SHIPPED:
+            out.setdefault(ref.__module__, set()).add(ref.__qualname__)
+    return {m: tuple(sorted(names)) for m, names in sorted(out.items())}
+
+
+def without_functions(text: str, names) -> str:
+    """A module's source ``text`` without its top-level functions ``names`` (decorators
+    included) and without their entries in its ``__all__``.
+
+    ``ValueError`` when one of them is not a top-level function of ``text``, or when what is
+    left still names one (a caller would fail only when a student's explorer reached it).
+    """
+    names = set(names)
+    tree = ast.parse(text)
+    lines = text.splitlines(keepends=True)
+    cut = {}
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name in names:
+            cut[node.name] = (min([node.lineno] + [d.lineno for d in node.decorator_list]),
+                              node.end_lineno)
+        elif (isinstance(node, ast.Assign) and len(node.targets) == 1
+              and getattr(node.targets[0], "id", None) == "__all__"):
+            cut["__all__"] = (node.lineno, node.end_lineno)
+    missing = names - set(cut)
+    if missing:
+        raise ValueError(f"no top-level function {sorted(missing)} to leave out")
+    listing = cut.pop("__all__", None)
+    if listing is not None:
+        start, end = listing
+        block = "".join(lines[start - 1:end])
+        for name in names:
+            block = re.sub(rf"\s*[\"']{re.escape(name)}[\"'],?", "", block)
+        lines[start - 1:end] = [block]
+    for start, end in sorted(cut.values(), reverse=True):
+        if listing is not None and start > listing[0]:
+            start, end = start - (listing[1] - listing[0]), end - (listing[1] - listing[0])
+        del lines[start - 1:end]
+    out = "".join(lines)
+    still = sorted(names & names_used(out))
+    if still:
+        raise ValueError(f"{still} left out but still named in the module")
+    return out
+
+
+def names_used(text: str) -> set[str]:
+    """Every name a module's source uses: names, attributes, imported names, whole strings."""
+    used = set()
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, ast.Name):
+            used.add(node.id)
+        elif isinstance(node, ast.Attribute):
+            used.add(node.attr)
+        elif isinstance(node, ast.alias):
+            used.add(node.name.rpartition(".")[2])
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            used.add(node.value)
+    return used
 
 
 def library_packages() -> list[str]:
@@ -145,7 +228,8 @@ def sources_digest() -> str:
     for rel in library_files():
         h.update(str(rel).encode() + b"\0" + (REPO_ROOT / rel).read_bytes() + b"\0")
     h.update(SETUP_SCRIPT.read_bytes())
-    h.update(json.dumps([course_version(), bundle_spec(), student_jupyter_config(),
+    h.update(json.dumps([course_version(), bundle_spec(), withheld_functions(),
+                         student_jupyter_config(),
                          pyproject_text("0"), student_readme(),
                          sys.version, sysconfig.get_platform()]).encode())
     return h.hexdigest()
@@ -178,9 +262,17 @@ def pyproject_text(version: str) -> str:
 
 def stage_sources(stage: Path, digest: str) -> Path:
     """Fill ``stage`` with what ``pip wheel`` builds from: the library, setup, metadata."""
+    withheld = withheld_functions()
+    gone = {name for names in withheld.values() for name in names}
     for rel in library_files():
         (stage / rel).parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(REPO_ROOT / rel, stage / rel)
+        text = (REPO_ROOT / rel).read_text(encoding="utf-8")
+        if module_name(rel) in withheld:
+            text = without_functions(text, withheld[module_name(rel)])
+        elif gone & names_used(text):   # e.g. a re-export of a function left out elsewhere
+            raise ValueError(f"{rel} names {sorted(gone & names_used(text))}, which the "
+                             "students' wheel leaves out")
+        (stage / rel).write_text(text, encoding="utf-8")
     shutil.copyfile(SETUP_SCRIPT, stage / "setup.py")
     (stage / "bundle.json").write_text(json.dumps(bundle_spec(), indent=1))
     for path, content in student_jupyter_config().items():

@@ -144,8 +144,10 @@ def _cell_html(r: CellResult, reveal: bool) -> str:
     if r.kind is CellKind.MANUAL:
         return "\n".join([_written_head(r)] + _outputs(r))
     score = "–" if r.score is None else f"{round(r.score, 2):g}"
+    # a number item is practice: checked and explained, worth no marks
+    mark = "practice, no marks" if r.max_score == 0 else f"{score} / {r.max_score:g}"
     parts = [f"<h2>{e(r.name)} <span class='badge {e(r.status.value)}'>{e(r.status.value)}"
-             f"</span> <small>{score} / {r.max_score:g}</small></h2>",
+             f"</span> <small>{mark}</small></h2>",
              f"<p class='msg'>{e(r.message)}</p>"]
     if r.kind is CellKind.FUNCTION and r.cases:
         parts += _visible_html([c for c in r.cases if c.visible], _up_to(r.name))

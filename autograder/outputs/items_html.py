@@ -258,6 +258,12 @@ def _short(text: str, limit: int = 110) -> str:
     return text if len(text) <= limit else text[:limit - 1] + "…"
 
 
+def _credit(r: CellResult) -> float:
+    """The share of an item a student earned; a practice item (0 points: the number items)
+    counts as 1 when right, so that its draw is still tested for fairness."""
+    return (r.score or 0.0) / r.max_score if r.max_score > 0 else float(r.status == Status.OK)
+
+
 def draw_tests(results: list[CellResult]) -> list[tuple[str, str, str, DrawTest, bool]]:
     """``(notebook, item, feature, test, possibly unfair)`` for every variant item and feature;
     unfair: p below :data:`FAIRNESS_ALPHA` divided by the number of tests (Bonferroni)."""
@@ -266,9 +272,8 @@ def draw_tests(results: list[CellResult]) -> list[tuple[str, str, str, DrawTest,
         for (nb, _gid, name), rs in _answered(results, kind).items():
             groups: dict[str, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
             for r in rs:
-                if r.max_score > 0:
-                    for feature, value in features(name, nb, r.student).items():
-                        groups[feature][value].append((r.score or 0.0) / r.max_score)
+                for feature, value in features(name, nb, r.student).items():
+                    groups[feature][value].append(_credit(r))
             found += [(nb, name, f, draw_test(g)) for f, g in groups.items()]
     tests = sum(t.p is not None for *_, t in found)
     cut = FAIRNESS_ALPHA / max(tests, 1)

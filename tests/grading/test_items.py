@@ -397,6 +397,34 @@ def test_an_unfair_draw_is_flagged_and_a_fair_one_is_not():
     assert html.count("possibly unfair draw</span>") == 1
 
 
+def test_a_practice_items_draw_is_still_tested():
+    """The number items carry 0 points: their draws are judged on right (ok) or wrong."""
+    results = []
+    for i in range(400):
+        s = f"u{i:03d}"
+        kind = variants.variant("q4_splines", s)
+        hard = (kind.kind, kind.rule) == ("b-spline", "d=b")
+        right = (i % 5 == 0) if hard else (i % 5 != 0)
+        results.append(_result(s, "q4_splines", "test_q4ci_your_end", 0.0, top=0.0,
+                               kind=CellKind.VALUE, name="q4ci_your_end",
+                               status=Status.OK if right else Status.FAILED))
+    found = {(name, feature): (t, unfair) for _, name, feature, t, unfair
+             in items_html.draw_tests(results)}
+    t, unfair = found[("q4ci_your_end", "spline and end rule")]
+    assert unfair and t.p < 1e-10
+
+
+def test_a_practice_items_feedback_says_no_marks():
+    from autograder.outputs import feedback
+
+    right = _result("ab123", "q5_phong", "test_q5b_your_intensity", 0.0, top=0.0,
+                    kind=CellKind.VALUE, name="q5b_your_intensity", status=Status.OK)
+    graded = _result("ab123", "q5_phong", "test_phong", 3.0, top=3.0)
+    page = feedback.render("ab123", "q5_phong", [right, graded], reveal_hidden=False)
+    assert "practice, no marks" in page and "0 / 0" not in page
+    assert "automatically graded <b>3 / 3</b>" in page
+
+
 class _Audit(HTMLParser):
     """What an accessibility check needs of the Items section."""
 

@@ -3,7 +3,8 @@
 - ``../shared/tools/check_contract.py`` (the contract's own checker) reports 0 shortfalls;
 - notebooks are committed with outputs cleared, kernel ``python3``, nbgrader schema 3;
 - grade_ids are unique across the whole assignment (nbgrader restores cells by grade_id);
-- every graded cell has points > 0 and each notebook totals 20 marks;
+- the "your numbers" items (registry kind ``value``) are practice: their test cells carry 0 points;
+  every other graded cell has points > 0, and each notebook totals 20 marks;
 - the setup cell comes first and is locked;
 - the auto-graded items of a notebook (solution cell ``name`` + graded test cell ``test_name``)
   are exactly the registry's entries for that notebook, of the same kind, and every test cell
@@ -82,7 +83,15 @@ def test_grade_ids_unique_across_assignment():
 def test_points(path):
     points = all_points(read(path))
     assert points, "no graded cells"
-    assert all(p > 0 for p in points.values()), {g: p for g, p in points.items() if p <= 0}
+    from autograder.exercises import for_notebook
+
+    practice = {f"test_{ex.name}" for ex in for_notebook(path.stem) if ex.kind == "value"}
+    assert practice and practice <= set(points), (practice, sorted(points))
+    # a number item is answered by typing what a shipped explorer or one's own function gives:
+    # the marks sit on the functions the grader runs itself
+    assert {g: points[g] for g in practice} == dict.fromkeys(practice, 0.0)
+    earning = {g: p for g, p in points.items() if g not in practice}
+    assert all(p > 0 for p in earning.values()), {g: p for g, p in earning.items() if p <= 0}
     assert sum(points.values()) == pytest.approx(MARKS_PER_NOTEBOOK), points
 
 

@@ -6,8 +6,9 @@
   from the zip itself, not from the builder's own check);
 - no file of the wheel holds a solution cell's code, a model answer of a manually graded cell
   or a multiple-choice key (the byte search is shown to work on each module's docstring);
-- installed alone in a fresh virtual environment, the wheel exposes every graded reference of
-  the registry with its docstring and signature, but neither ``inspect.getsource`` nor
+- installed alone in a fresh virtual environment, the wheel exposes none of the graded
+  functions it leaves out (``student_bundle.withheld_functions``), and the references it still
+  carries (``STILL_SHIPPED``) with their docstrings and signatures, but neither ``inspect.getsource`` nor
   IPython's ``??`` finds its source (the same probe does find it in the instructors' copy);
 - every release notebook runs in that environment (kernel included) with no error but a stub's;
 - in that environment nbgrader's instructor tools are off (its own Jupyter config), Validate on.
@@ -76,12 +77,15 @@ def student_python(wheel) -> Path:
     return studentenv.python(wheel)
 
 
-def graded_references() -> dict[str, tuple[str, str]]:
-    """``{exercise: (module, qualname)}`` of every graded function's reference."""
+def graded_references(shipped: bool = True) -> dict[str, tuple[str, str]]:
+    """``{exercise: (module, qualname)}`` of every graded function's reference the wheel still
+    carries (``shipped``) or leaves out."""
     from autograder.exercises import REGISTRY
+    from autograder.student_bundle import STILL_SHIPPED
 
     refs = {n: (ex.reference.__module__, ex.reference.__qualname__)
-            for n, ex in REGISTRY.items() if ex.kind == "function"}
+            for n, ex in REGISTRY.items()
+            if ex.kind == "function" and (ex.reference.__qualname__ in STILL_SHIPPED) == shipped}
     assert refs and all(m.startswith("course_lib.") for m, _ in refs.values()), refs
     return refs
 
@@ -209,6 +213,17 @@ def _probe_sources(targets):
             "signature": str(inspect.signature(obj)), "found": found,
         }
     return report
+
+
+def test_student_env_has_no_left_out_reference(student_python, tmp_path):
+    refs = graded_references(shipped=False)
+    code = ("import importlib, json, sys\n"
+            "refs = json.loads(sys.argv[1])\n"
+            "print(json.dumps([m + '.' + q for m, q in refs\n"
+            "                  if hasattr(importlib.import_module(m), q)]))\n")
+    proc = studentenv.run(code, json.dumps(sorted(set(refs.values()))), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert json.loads(proc.stdout.strip().splitlines()[-1]) == []
 
 
 def test_student_env_hides_every_graded_reference(student_python, tmp_path):

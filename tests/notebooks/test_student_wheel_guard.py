@@ -84,3 +84,56 @@ def test_wheel_requirements_match_pyproject():
     got = {Requirement(r).name: Requirement(r).specifier
            for r in student_bundle.student_requirements()}
     assert got == expected and set(got) == wanted
+
+
+def test_the_wheel_leaves_out_every_graded_function_but_those_explorers_need():
+    from autograder.exercises import REGISTRY
+
+    graded = {ex.reference.__qualname__ for ex in REGISTRY.values() if ex.kind == "function"}
+    withheld = {n for names in student_bundle.withheld_functions().values() for n in names}
+    assert student_bundle.STILL_SHIPPED <= graded, student_bundle.STILL_SHIPPED - graded
+    assert withheld == graded - student_bundle.STILL_SHIPPED and withheld
+
+
+def test_left_out_functions_go_with_their_decorators_and_all_entries():
+    text = ('"""Doc: see :func:`gone`."""\nimport functools\n__all__ = [\n    "kept",\n'
+            '    "gone",\n]\n\n\n@functools.lru_cache\ndef gone(x):\n    return x + 1\n\n\n'
+            'def kept(x):\n    return 2 * x\n')
+    out = student_bundle.without_functions(text, {"gone"})
+    namespace = {}
+    exec(compile(out, "m", "exec"), namespace)
+    assert namespace["__all__"] == ["kept"] and namespace["kept"](2) == 4
+    assert "gone" not in namespace and "see :func:`gone`" in out
+    with pytest.raises(ValueError, match="still named"):
+        student_bundle.without_functions(text + "\nalias = gone\n", {"gone"})
+    with pytest.raises(ValueError, match="no top-level function"):
+        student_bundle.without_functions(text, {"absent"})
+
+
+def test_staged_library_imports_without_the_left_out_functions(tmp_path):
+    """The staged sources (what Cython compiles) import, as pure Python, with every module,
+    and none of them defines a left-out function."""
+    import subprocess
+
+    stage = student_bundle.stage_sources(tmp_path, "0" * 64)
+    withheld = student_bundle.withheld_functions()
+    code = ("import importlib, json, pkgutil, sys, course_lib\n"
+            "assert course_lib.__file__.startswith(sys.argv[1]), course_lib.__file__\n"
+            "mods = [m.name for m in pkgutil.walk_packages(course_lib.__path__, 'course_lib.')]\n"
+            "found = {m: sorted(n for n in json.loads(sys.argv[2]).get(m, [])\n"
+            "                   if hasattr(importlib.import_module(m), n)) for m in mods}\n"
+            "print(json.dumps({m: f for m, f in found.items() if f}))\n")
+    proc = subprocess.run([sys.executable, "-c", code, str(stage), __import__("json").dumps(withheld)],
+                          cwd=stage, capture_output=True, text=True, timeout=300,
+                          env={"MPLBACKEND": "Agg", "PATH": "/usr/bin:/bin"}, check=False)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.strip().splitlines()[-1] == "{}"
+
+
+def test_staging_refuses_a_module_that_uses_a_function_left_out_elsewhere(tmp_path, monkeypatch):
+    """``collimator_resolution`` is drawn by the q2 figures and explorer, in other modules: left
+    out, the build stops with their name instead of shipping an explorer that fails to load."""
+    monkeypatch.setattr(student_bundle, "withheld_functions",
+                        lambda: {"course_lib.gamma_camera": ("collimator_resolution",)})
+    with pytest.raises(ValueError, match=r"gamma_camera\.py names \['collimator_resolution'\]"):
+        student_bundle.stage_sources(tmp_path, "0" * 64)

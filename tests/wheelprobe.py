@@ -1,0 +1,207 @@
+"""Does anything a copy of ``course_lib`` lets one call answer a graded function's hidden cases?
+
+A determined student does not need a function's name: any callable of the students' copy that
+returns the reference's answer can be wrapped by a one-line graded function (or its compiled
+module carried into the sandbox). So the probe tries *every* callable reachable from the copy's
+modules (public or private, plain Python or compiled, module-level or a class's static and
+class methods) on the hidden cases of *every* graded function, and reports each callable that
+gives the reference's answer on all of them, judged by that exercise's own comparison rule.
+
+:func:`find_answers` runs the probe with any interpreter (the instructors' venv, where it must
+find every reference: the probe's own oracle; or the students' environment, where it must find
+nothing) in a subprocess of its own, from a scratch folder, figures headless. The student side
+(:data:`STUDENT_SIDE`) uses only NumPy and the standard library: it screens each callable's
+outputs loosely (same size, same sorted values within 1e-3) and sends back the screened outputs;
+the exercise's own rule, here, decides.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pickle
+import subprocess
+from pathlib import Path
+
+import numpy as np
+
+#: hidden cases tried per exercise (those that must not raise)
+CASES_PER_EXERCISE = 6
+
+STUDENT_SIDE = r'''
+import importlib, inspect, io, os, pickle, pkgutil, signal, sys, warnings
+import numpy as np
+warnings.simplefilter("ignore")
+os.environ.setdefault("MPLBACKEND", "Agg")
+cases_path, out_path, package = sys.argv[1:4]
+sys.path[:0] = sys.argv[4:]             # a forged copy's folder (the probe's own tests)
+with open(cases_path, "rb") as f:
+    cases = pickle.load(f)              # {exercise: [(args, kwargs, expected plain data)]}
+
+class _Slow(BaseException):
+    pass
+
+def _alarm(*_):
+    raise _Slow()
+
+signal.signal(signal.SIGALRM, _alarm)
+
+def _floats(x):
+    try:
+        a = np.asarray(x, dtype=float)
+    except Exception:
+        try:
+            a = np.concatenate([np.ravel(np.asarray(p, dtype=float)) for p in x])
+        except Exception:
+            return None
+    return np.sort(np.ravel(a))
+
+def _screen(expected, got):
+    if expected is None:
+        return got is None
+    e, g = _floats(expected), _floats(got)
+    return (e is not None and g is not None and e.shape == g.shape
+            and bool(np.allclose(g, e, rtol=1e-3, atol=1e-6, equal_nan=True)))
+
+root = importlib.import_module(package)
+modules, broken = [], {}
+for info in pkgutil.walk_packages(root.__path__, package + "."):
+    try:
+        modules.append(importlib.import_module(info.name))
+    except BaseException as exc:
+        broken[info.name] = repr(exc)[:200]
+modules.insert(0, root)
+
+def _callables(module):
+    for name, obj in sorted(vars(module).items()):
+        owner = getattr(obj, "__module__", "") or ""
+        if not (owner == package or owner.startswith(package + ".")):
+            continue
+        if inspect.isclass(obj):
+            for attr, raw in sorted(vars(obj).items()):
+                if isinstance(raw, (staticmethod, classmethod)):
+                    yield f"{module.__name__}.{name}.{attr}", getattr(obj, attr)
+        elif callable(obj):
+            yield f"{module.__name__}.{name}", obj
+
+try:
+    import matplotlib.pyplot as plt
+except Exception:
+    plt = None
+seen, found, tried = set(), {}, 0
+for module in modules:
+    for qual, fn in _callables(module):
+        if id(fn) in seen:
+            continue
+        seen.add(id(fn))
+        try:
+            signature = inspect.signature(fn)
+        except (TypeError, ValueError):
+            signature = None
+        for exercise, rows in cases.items():
+            outputs = []
+            if signature is not None:
+                try:
+                    signature.bind(*pickle.loads(rows[0][0]), **pickle.loads(rows[0][1]))
+                except TypeError:
+                    continue
+            for args, kwargs, expected in rows:
+                tried += 1
+                stdout, sys.stdout = sys.stdout, io.StringIO()
+                signal.setitimer(signal.ITIMER_REAL, 0.3)
+                try:
+                    got = fn(*pickle.loads(args), **pickle.loads(kwargs))
+                except BaseException:
+                    got = _Slow
+                finally:
+                    signal.setitimer(signal.ITIMER_REAL, 0)
+                    sys.stdout = stdout
+                if got is _Slow or not _screen(expected, got):
+                    break
+                outputs.append(got)
+            else:
+                found.setdefault(exercise, {})[qual] = pickle.dumps(outputs)
+            if plt is not None:
+                plt.close("all")
+with open(out_path, "wb") as f:
+    pickle.dump({"found": found, "broken": broken, "modules": [m.__name__ for m in modules],
+                 "callables": len(seen), "calls": tried}, f)
+sys.stdout.flush()
+os._exit(0)
+'''
+
+
+def probe_cases(student: str = "wheel-probe") -> dict:
+    """``{exercise: [(args, kwargs, expected, case)]}``: the first cases of every graded function
+    that must not raise (hidden ones first), drawn as for ``student``, with the reference's
+    answers."""
+    from autograder.exercises import REGISTRY
+    from autograder.exercises.base import to_plain
+
+    out = {}
+    for k, (name, ex) in enumerate(sorted(REGISTRY.items())):
+        if ex.kind != "function":
+            continue
+        rng = np.random.default_rng([k, len(student), 2006])
+        rows = []
+        for case in ex.draw_cases(rng):
+            if case.raises is None:
+                rows.append((case.args, case.kwargs, to_plain(ex.expected(case)), case))
+        # hidden cases first; a function of no argument has visible cases only
+        rows.sort(key=lambda row: row[3].visible)
+        assert rows, f"{name}: no case that returns"
+        out[name] = rows[:CASES_PER_EXERCISE]
+    return out
+
+
+def find_answers(python: str | Path, workdir: Path, env: dict | None = None,
+                 timeout: int = 1500, package: str = "course_lib",
+                 path: tuple[str, ...] = ()) -> dict:
+    """Run the probe on ``package`` with ``python`` from ``workdir`` (``path``: folders put
+    first on its ``sys.path``): ``{"answers": {exercise: [callables that
+    answer it]}, "broken": {module: error}, "modules": [...], "callables": n, "calls": n}``."""
+    from autograder.exercises import REGISTRY
+
+    cases = probe_cases()
+    workdir = Path(workdir)
+    workdir.mkdir(parents=True, exist_ok=True)
+    sent = {name: [(pickle.dumps(a), pickle.dumps(kw), exp) for a, kw, exp, _ in rows]
+            for name, rows in cases.items()}
+    (workdir / "cases.pkl").write_bytes(pickle.dumps(sent))
+    env = dict(os.environ if env is None else env, MPLBACKEND="Agg")
+    proc = subprocess.run([str(python), "-I", "-c", STUDENT_SIDE, "cases.pkl", "found.pkl",
+                           package, *map(str, path)],
+                          cwd=workdir, env=env, capture_output=True, text=True,
+                          timeout=timeout, check=False, stdin=subprocess.DEVNULL)
+    if proc.returncode != 0 or not (workdir / "found.pkl").exists():
+        raise RuntimeError(f"the probe failed ({proc.returncode}):\n{proc.stderr[-3000:]}")
+    raw = pickle.loads((workdir / "found.pkl").read_bytes())
+    answers = {}
+    for name, candidates in raw["found"].items():
+        ex, rows = REGISTRY[name], cases[name]
+        for qual, blob in candidates.items():
+            outputs = pickle.loads(blob)
+            if all(_matches(ex, row, got) for row, got in zip(rows, outputs)):
+                answers.setdefault(name, []).append(qual)
+    return {"answers": {k: sorted(v) for k, v in sorted(answers.items())},
+            **{k: raw[k] for k in ("broken", "modules", "callables", "calls")}}
+
+
+def _matches(ex, row, got) -> bool:
+    """The exercise's own rule (the grader's default: within 1e-6 relative) accepts ``got``."""
+    from autograder.exercises.base import close, to_plain
+
+    _, _, expected, _ = row
+    try:
+        got = to_plain(got)
+    except Exception:
+        return False
+    rule = ex.compare or close()
+    try:
+        return rule(expected, got) is None
+    except Exception:
+        return False
+
+
+def summary(result: dict) -> str:
+    return json.dumps(result["answers"], indent=1)
