@@ -1,9 +1,9 @@
-"""The students' README (inside their wheel) and the instructors' guide give students the same commands.
+"""The students' README (inside their wheel) and the instructors' guide give the same commands.
 
 Off the hub a student needs the course's exchange settings before nbgrader's fetch, submit and
 fetch_feedback work; the instructors' guide (``docs/instructors.md``, step 3) gives the commands,
-and the students' README (``autograder.student_bundle.student_readme``, the wheel's long description) must give
-the same ones, with the file the course really writes.
+and the students' README (``autograder.student_bundle.student_readme``, the wheel's long
+description) must give the same ones, with the file the course really writes.
 """
 
 from __future__ import annotations
