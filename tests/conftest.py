@@ -12,50 +12,27 @@
   as the SQLAlchemy URL of its ``postgres`` database; ``postgres.fresh_database`` makes an
   empty one. Skips only when the server binaries are not installed.
 
-Importing ``nbformat`` imports ``jsonschema``'s format checkers, and with them
-``rfc3987_syntax``, which builds a Lark Earley parser of RFC 3987 at import: about 2 s of CPU
-in every test process, for a check ("iri" strings) no test's notebook needs. It is built on the
-first IRI checked instead (:func:`_defer_iri_grammar`); ``make test`` also leaves out the unused
-``nbmake`` plugin, which would import ``nbformat`` before this file runs.
+Every Python process the tests start, and this one, first runs ``tests/startup/sitecustomize.py``
+(``PYTHONPATH``): it puts off building a parser that importing ``nbformat`` would otherwise
+build, about 2 s of CPU per process. ``make test`` also leaves out the unused ``nbmake``
+plugin, which would import ``nbformat`` before this file runs.
 """
 
 from __future__ import annotations
 
 import importlib.util
 import os
-import sys
-import types
 from pathlib import Path
 
 import pytest
 
 
-def _defer_iri_grammar() -> None:
-    """Put off building ``rfc3987_syntax``'s parser until an IRI is validated.
-
-    ``jsonschema`` takes only ``rfc3987_syntax.is_valid_syntax`` from the package; this stands a
-    package in its place whose ``is_valid_syntax`` imports the real one on its first call, so
-    what is valid stays exactly as before.
-    """
-    if "rfc3987_syntax" in sys.modules:
-        return
-    spec = importlib.util.find_spec("rfc3987_syntax")
-    if spec is None or not spec.submodule_search_locations:
-        return
-    package = types.ModuleType("rfc3987_syntax")
-    package.__spec__, package.__file__ = spec, spec.origin
-    package.__path__ = list(spec.submodule_search_locations)
-
-    def is_valid_syntax(term: str, value: str) -> bool:
-        from rfc3987_syntax.syntax_helpers import is_valid_syntax as real
-
-        return real(term, value)
-
-    package.is_valid_syntax = is_valid_syntax
-    sys.modules["rfc3987_syntax"] = package
-
-
-_defer_iri_grammar()
+#: run at the start of every Python process the tests launch, and of this one (see its docstring)
+STARTUP = Path(__file__).resolve().parent / "startup"
+os.environ["PYTHONPATH"] = os.pathsep.join(
+    p for p in (str(STARTUP), os.environ.get("PYTHONPATH", "")) if p)
+_spec = importlib.util.spec_from_file_location("_tests_startup", STARTUP / "sitecustomize.py")
+_spec.loader.exec_module(importlib.util.module_from_spec(_spec))
 
 os.environ["MPLBACKEND"] = "Agg"
 os.environ.setdefault("JUPYTERHUB_USER", "ci-student")
