@@ -11,14 +11,28 @@
 - ``postgres_url``: a throw-away PostgreSQL server for this session (``tests/postgres.py``),
   as the SQLAlchemy URL of its ``postgres`` database; ``postgres.fresh_database`` makes an
   empty one. Skips only when the server binaries are not installed.
+
+Every Python process the tests start, and this one, first runs ``tests/startup/sitecustomize.py``
+(``PYTHONPATH``): it puts off building a parser that importing ``nbformat`` would otherwise
+build, about 2 s of CPU per process. ``make test`` also leaves out the unused ``nbmake``
+plugin, which would import ``nbformat`` before this file runs.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from pathlib import Path
 
 import pytest
+
+
+#: run at the start of every Python process the tests launch, and of this one (see its docstring)
+STARTUP = Path(__file__).resolve().parent / "startup"
+os.environ["PYTHONPATH"] = os.pathsep.join(
+    p for p in (str(STARTUP), os.environ.get("PYTHONPATH", "")) if p)
+_spec = importlib.util.spec_from_file_location("_tests_startup", STARTUP / "sitecustomize.py")
+_spec.loader.exec_module(importlib.util.module_from_spec(_spec))
 
 os.environ["MPLBACKEND"] = "Agg"
 os.environ.setdefault("JUPYTERHUB_USER", "ci-student")

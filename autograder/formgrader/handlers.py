@@ -24,15 +24,16 @@ from tornado import web
 REFUSED = {
     "assign": (
         "In 4F9 the student version is made by the course's release, which checks it for "
-        "leaks first: run `python -m autograder release` (README, 'For instructors', step 1). "
+        "leaks first: run `python -m autograder release` (docs/instructors.md, step 1). "
         "Nothing was done."),
     "autograde": (
         "In 4F9 submissions are graded outside the students' kernels: run `python -m "
-        "autograder grade course/submitted --out grading/` (README, step 4). Nothing was done."),
+        "autograder grade course/submitted --out grading/` (docs/instructors.md, step 4). "
+        "Nothing was done."),
     "generate_feedback": (
         "In 4F9 feedback is written by `python -m autograder feedback --grading grading/` "
-        "(README, step 6): nbgrader's generate_feedback would copy the marker's rubric into "
-        "the students' pages. Nothing was done."),
+        "(docs/instructors.md, step 6): nbgrader's generate_feedback would copy the marker's "
+        "rubric into the students' pages. Nothing was done."),
 }
 
 

@@ -14,6 +14,8 @@ mistaken ones.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -21,6 +23,7 @@ from autograder.exercises import REGISTRY
 from autograder.exercises.base import NUMBER_ATOL, NUMBER_RTOL
 from course_lib import clipping, gamma_camera, shading, splines, ultrasound
 from course_lib import marching_cubes as mc
+from course_lib import variants as variants_module
 from course_lib.variants import NOTEBOOKS, problems, variant
 
 IDS = [f"s{k:05d}" for k in range(10_000)]
@@ -28,8 +31,12 @@ IDS = [f"s{k:05d}" for k in range(10_000)]
 
 @pytest.fixture(scope="module")
 def numbers():
-    """Each notebook's numbers for the 10,000 ids, drawn once."""
-    return {nb: [variant(nb, sid).numbers for sid in IDS] for nb in NOTEBOOKS}
+    """Each notebook's numbers for the 10,000 ids, drawn once (and kept under ``.cache/`` until
+    ``course_lib/variants.py``, a pure function of notebook and id, changes)."""
+    from diskcache import cached
+
+    return cached("variant-numbers", [Path(variants_module.__file__)],
+                  lambda: {nb: [variant(nb, sid).numbers for sid in IDS] for nb in NOTEBOOKS})
 
 
 def _rejected(item: str, expected, mistaken) -> bool:

@@ -17,12 +17,14 @@ import subprocess
 import sys
 
 import pytest
-from nbtools import CELL_TIMEOUT, errors, execute, graded_items, nbgrader_meta, read
+from nbtools import CELL_TIMEOUT, errors, execute_shared, graded_items, nbgrader_meta, read
 
 from autograder.course import ASSIGNMENT, NOTEBOOKS_DIR, TEXT_STUB, nbgrader_env, source_notebooks
 
 NOTEBOOKS = source_notebooks()
-pytestmark = pytest.mark.skipif(not NOTEBOOKS, reason="no notebooks/q*.ipynb yet")
+#: one worker runs this module and test_student_experience.py, which share each notebook's run
+pytestmark = [pytest.mark.skipif(not NOTEBOOKS, reason="no notebooks/q*.ipynb yet"),
+              pytest.mark.xdist_group("release_runs")]
 
 MARKERS = ("BEGIN SOLUTION", "END SOLUTION", "BEGIN HIDDEN TESTS", "END HIDDEN TESTS",
            "autograder.incell")
@@ -106,7 +108,7 @@ def test_release_leaves_out_every_items_explanation(released, source):
 @pytest.mark.timeout(900)
 @pytest.mark.parametrize("source", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
 def test_release_errors_only_at_stubs(released, source):
-    nb = execute(released[source.stem], cwd=NOTEBOOKS_DIR, allow_errors=True, timeout=CELL_TIMEOUT)
+    nb = execute_shared(released[source.stem], cwd=NOTEBOOKS_DIR, timeout=CELL_TIMEOUT)
     found = errors(nb)
     # the one consequence of a stub that is not itself a NotImplementedError: a multiple-choice
     # answer cell is replaced by the stub, so its variable never exists and its test cell's

@@ -20,14 +20,17 @@ import math
 import re
 
 import pytest
-from nbtools import CELL_TIMEOUT, execute, nbgrader_meta, option_texts, read
+from nbtools import (CELL_TIMEOUT, execute_shared, first_untagged_error, nbgrader_meta,
+                     option_texts, read)
 
 from autograder.course import NOTEBOOKS_DIR, source_notebooks
 from autograder.exercises import REGISTRY
 from course_lib.answers import choice_letters
 
 NOTEBOOKS = source_notebooks()
-pytestmark = pytest.mark.skipif(not NOTEBOOKS, reason="no notebooks/q*.ipynb yet")
+#: one worker runs this module and test_release.py, which share each release notebook's run
+pytestmark = [pytest.mark.skipif(not NOTEBOOKS, reason="no notebooks/q*.ipynb yet"),
+              pytest.mark.xdist_group("release_runs")]
 
 FIGURE_MIME = ("image/png", "application/vnd.jupyter.widget-view+json")
 #: A code line that draws: a plot helper, pyplot, an explorer.
@@ -60,8 +63,6 @@ def released(course):
 def test_run_all_on_untouched_release(released, source, who, monkeypatch, tmp_path):
     """On the hub (the id is known), and on a student's own machine before STUDENT_ID is
     typed (playtest 6: Run All stopped at the first item's options there)."""
-    from nbclient.exceptions import CellExecutionError
-
     if who == "no-id-yet":         # the kernel inherits this: no hub user, no nbgrader id
         import matplotlib
 
@@ -69,11 +70,12 @@ def test_run_all_on_untouched_release(released, source, who, monkeypatch, tmp_pa
         monkeypatch.setenv("MPLCONFIGDIR", matplotlib.get_configdir())   # its font cache
         monkeypatch.setenv("HOME", str(tmp_path))
 
-    try:  # nbclient's default allow_errors=False: only cells tagged raises-exception may fail
-        nb = execute(released[source.stem], cwd=NOTEBOOKS_DIR, timeout=CELL_TIMEOUT)
-    except CellExecutionError as exc:
-        text = re.sub(r"\x1b\[[0-9;]*m", "", str(exc))
-        pytest.fail(f"Run All stopped at an untagged cell:\n{text[:800]}\n...\n{text[-400:]}")
+    # only cells tagged raises-exception may fail (nbclient's allow_errors=False, JupyterLab's
+    # Run All); the run with the hub's id is shared with test_release.py's
+    nb = execute_shared(released[source.stem], cwd=NOTEBOOKS_DIR, timeout=CELL_TIMEOUT)
+    stopped = first_untagged_error(nb)
+    if stopped:
+        pytest.fail(f"Run All stopped at an untagged cell:\n{stopped[:800]}\n...\n{stopped[-400:]}")
     blank, silent_tests = [], []
     for i, cell in enumerate(nb.cells):
         if cell.cell_type != "code":

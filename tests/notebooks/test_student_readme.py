@@ -1,9 +1,9 @@
-"""The students' README (inside their wheel) and the main README give students the same commands.
+"""The students' README (inside their wheel) and the instructors' guide give the same commands.
 
 Off the hub a student needs the course's exchange settings before nbgrader's fetch, submit and
-fetch_feedback work; the main README's instructor section gives the commands, and the students'
-README (``autograder.student_bundle.student_readme``, the wheel's long description) must give
-the same ones, with the file the course really writes.
+fetch_feedback work; the instructors' guide (``docs/instructors.md``, step 3) gives the commands,
+and the students' README (``autograder.student_bundle.student_readme``, the wheel's long
+description) must give the same ones, with the file the course really writes.
 """
 
 from __future__ import annotations
@@ -29,8 +29,8 @@ def _block_with(text: str, needle: str) -> str:
     return blocks[0]
 
 
-def test_the_students_readme_gives_the_main_readmes_off_hub_commands():
-    main = _commands(_block_with((REPO / "README.md").read_text(encoding="utf-8"),
+def test_the_students_readme_gives_the_instructors_guides_off_hub_commands():
+    main = _commands(_block_with((REPO / "docs" / "instructors.md").read_text(encoding="utf-8"),
                                  "for-students"))
     students = _commands(_block_with(student_readme(), "for-students"))
     assert main and all(line in students for line in main), (main, students)
