@@ -47,7 +47,7 @@ def compare(before: Path, after: Path, csv_only: bool = False) -> int:
                 a[key].read_text("utf-8", "replace").splitlines(),
                 b[key].read_text("utf-8", "replace").splitlines(), "before", "after", lineterm="")
             print("\n".join(list(lines)[:40]))
-    for key in sorted((a.keys() ^ b.keys())):
+    for key in sorted(a.keys() ^ b.keys()):
         if key.split("/")[0] in runs_a & runs_b:
             differ += 1
             print(f"DIFFERS (file in one snapshot only): {key}")
