@@ -11,7 +11,9 @@ The instructor's source notebooks end every graded test cell with::
 which is what plain ``nbgrader autograde`` does; it keeps the source notebooks honest (CI runs
 them, so the notebook solution must agree with the reference on every case). The grades that
 count come from ``python -m autograder grade``, which runs the same cases outside the kernel.
-Both judge with :mod:`autograder.judging`, so a case passes here exactly when it passes there.
+Both judge each case with :func:`autograder.judging.judge_case` and the cell with
+:func:`autograder.judging.judge_cell`, so a case passes here exactly when it passes there (the
+kernel sees no cell source, so the rules about a cell's source do not apply here).
 """
 
 from __future__ import annotations
