@@ -70,7 +70,7 @@ class NameJob:
     """
 
     name: str
-    kind: str
+    kind: str                       #: ``FUNCTION`` or ``CHOICE``, as :func:`wire_kind` gives it
     cells: list[tuple[str, str]]
     cases: list[CaseInput] = field(default_factory=list)
 
