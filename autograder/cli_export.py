@@ -20,6 +20,7 @@ from pathlib import Path
 from .course import ASSIGNMENT, DEFAULT_COURSE_ROOT, default_db_url
 from .outputs.gradebook_url import MissingDriver, resolve_db_url
 from .exercises import REGISTRY
+from .model import CellKind
 from .grade.sources import default_sources, load_source
 from .outputs import export
 
@@ -117,7 +118,8 @@ def cell_kinds(sources) -> dict[tuple[str, str], str]:
     kinds = {}
     for s in sources:
         for name, test_id, _ in s.graded:
-            kinds[(s.name, test_id)] = REGISTRY[name].kind if name in REGISTRY else "function"
+            kinds[(s.name, test_id)] = (REGISTRY[name].kind if name in REGISTRY
+                                         else CellKind.FUNCTION).value
         for gid, _ in s.manual:
-            kinds[(s.name, gid)] = "manual"
+            kinds[(s.name, gid)] = CellKind.MANUAL.value
     return kinds

@@ -5,13 +5,16 @@ code did on each case as a :class:`~autograder.model.CaseOutcome`; this module j
 
 - :func:`judge_case` gives one case's :class:`~autograder.model.Verdict` and a reason, comparing a
   returned value with the reference's answer by the exercise's own rule. A rule returns ``None``
-  (a match), a :class:`~autograder.exercises.base.Mismatch` (its ``kind`` says wrong shape or
-  wrong value) or a plain ``str`` (a wrong value). Nothing here looks inside message text.
+  (a match) or a :class:`~autograder.exercises.base.Mismatch` (its ``kind`` says wrong shape or
+  wrong value). Nothing here looks inside message text.
 - :func:`judge_choice` judges a multiple-choice answer with
   :func:`course_lib.answers.choice_letters`, the course's one answer format.
-- :func:`summarise` turns a cell's case records into its score, status and message;
-  :func:`unanswered_or_broken` gives the status of a cell whose answer is missing or malformed
-  (issue 9: the student is told what to do, and never that the grader failed).
+- :func:`judge_cell` gives a whole cell's :class:`~autograder.model.CellVerdict` from its
+  :class:`CellEvidence`: the precedence of every rule (a reference imported, an item not typed,
+  an answer missing or malformed, the cases' summary) in one place, used by ``incell.check()``
+  and by ``grade`` alike. Its parts: :func:`summarise` (score, status and message of the cases)
+  and :func:`unanswered_or_broken` (the status of a cell whose answer is missing or malformed:
+  the student is told what to do, and never that the grader failed).
 
 It imports the model and the registry's helpers, nothing of ``grade`` or ``outputs``.
 """
@@ -19,13 +22,14 @@ It imports the model and the registry's helpers, nothing of ``grade`` or ``outpu
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from .exercises.base import Exercise, Mismatch, NotPlainData, same_choice, to_plain
+from .exercises.base import Exercise, NotPlainData, as_mismatch, same_choice, to_plain
 from .model import (SEVERITY, STATUS_MEANING, VERDICT_STATUS, VERDICT_WORDS, AnswerHint,
-                    AnswerShape, CaseOutcome, CaseRecord, CellKind, OutcomeKind, Status,
-                    ValueSummary, Verdict)
+                    AnswerShape, CaseOutcome, CaseRecord, CellKind, CellVerdict, OutcomeKind,
+                    Status, ValueSummary, Verdict)
 
 #: The MRO entry of the exception the released stubs raise (``raise NotImplementedError()``).
 NOT_IMPLEMENTED = "builtins.NotImplementedError"
@@ -48,15 +52,13 @@ def clip(text: str, n: int) -> str:
 def rule_verdict(ex: Exercise, expected, received) -> tuple[Verdict, str]:
     """Compare with the exercise's rule: ``(PASS, "")`` or the mismatch's verdict and text."""
     try:
-        why = ex.compare(expected, received)
+        why = as_mismatch(ex.compare(expected, received))
     except Exception as exc:  # noqa: BLE001 - a rule that cannot compare is a wrong answer
         return Verdict.WRONG_VALUE, f"wrong value (the answer could not be compared: " \
                                     f"{type(exc).__name__})"
     if why is None:
         return Verdict.PASS, ""
-    if isinstance(why, Mismatch):
-        return Verdict(why.kind), why.text
-    return Verdict.WRONG_VALUE, str(why)
+    return Verdict(why.kind), why.text
 
 
 def judge_case(ex: Exercise, case, expected, outcome: CaseOutcome) -> tuple[Verdict, str]:
@@ -131,7 +133,7 @@ def judge_value(ex: Exercise, outcome: CaseOutcome, student: str) -> tuple[Verdi
 
 def judge_item(ex: Exercise, outcome: CaseOutcome, student: str | None) -> tuple[Verdict, str]:
     """A choice or a value item, judged for ``student``."""
-    if ex.kind == "value":
+    if ex.kind is CellKind.VALUE:
         return judge_value(ex, outcome, student)
     return judge_choice(ex, outcome, student)
 
@@ -233,7 +235,8 @@ def unanswered_or_broken(name: str, kind: CellKind, hint: AnswerHint, defined: b
 
 
 def not_typed(name: str, kind: CellKind) -> str:
-    """The message for a choice or number item whose cell computes its answer (issue 11)."""
+    """The message for a choice or number item whose cell computes its answer instead of
+    typing it (items are graded on what the student types)."""
     example = "\"b\"" if kind is CellKind.CHOICE else "[1.25, 0.5, 3.0]"
     return (f"not typed: the cell of {name} must set {name} to your answer typed out as a "
             f"literal, e.g. {name} = {example}. Items are graded on what you type, not on "
@@ -254,6 +257,99 @@ def reference_imported(name: str, reference: str) -> tuple[Status, str]:
     return Status.REFERENCE_USED, (f"the cell of {name} imports {reference}, from course_lib, "
                                    "the course's reference library: a graded function may use "
                                    "only NumPy and your own answers, so this test scores 0")
+
+
+# --------------------------------------------------------------------------------------------
+# a cell's verdict: the rules in their order
+
+
+@dataclass
+class CellEvidence:
+    """Everything one graded cell's verdict depends on, once its code has run (or been called
+    in the kernel by ``incell.check``)."""
+
+    exercise: Exercise
+    points: float
+    records: list[CaseRecord]               #: the judged cases (one for an item)
+    hint: AnswerHint = field(default_factory=AnswerHint)   #: what the cell's source shows
+    defined: bool = True                    #: the name existed after the solution cells ran
+    load_notes: list[str] = field(default_factory=list)    #: why cells failed, as shown
+    typed: bool = True                      #: an item's cell types its answer as a literal
+    answer: CaseOutcome | None = None       #: an item's answer as judged
+    notes: list[str] = field(default_factory=list)  #: what the student is told besides
+    others: tuple[str, ...] = ()            #: other students' ids the notebook names
+    student: str = ""                       #: whose notebook (the folder's id)
+    reveal: bool = False                    #: hidden tests revealed (after the deadline)
+
+    @property
+    def load_why(self) -> str:
+        """The last few load notes, for the advice of a name that is not defined."""
+        return "; ".join(clip(n, 200) for n in self.load_notes[-3:])
+
+
+def judge_cell(ev: CellEvidence) -> CellVerdict:
+    """The verdict of one graded cell: the first of these rules that applies decides.
+
+    1. A graded function whose cell imports the course's reference scores 0
+       (``reference-used``), whatever its cases did.
+    2. An item (choice or number) whose cell computes its answer instead of typing it scores 0
+       (``failed``, "not typed"), unless rule 4's advice applies to it.
+    3. Cases that used the reference or that the sandbox refused keep their summary.
+    4. A cell that earned nothing and whose answer is absent or malformed gets the status and
+       advice for that (:func:`unanswered_or_broken`: unanswered, wrong signature, not defined).
+    5. Otherwise the cases' summary (:func:`summarise`): ``points × passed / cases``, the status
+       of the most serious failure.
+
+    The message then carries the notes (and, revealed, whose numbers a wrong item fits).
+    """
+    ex, kind = ev.exercise, ev.exercise.kind
+    score, status, message = summarise(ev.records, ev.points, kind)
+
+    def broken():
+        return unanswered_or_broken(ex.name, kind, ev.hint, ev.defined, ev.load_why)
+
+    if kind is CellKind.FUNCTION and ev.hint.reference:                            # 1
+        score, (status, message) = 0.0, reference_imported(ex.name, ev.hint.reference)
+    elif kind.is_item and not ev.typed and ev.hint.shape is AnswerShape.WRITTEN:   # 2
+        score, (status, message) = 0.0, (broken() or (Status.FAILED, not_typed(ex.name, kind)))
+    elif status in (Status.REFERENCE_USED, Status.REJECTED_CODE):                  # 3
+        pass
+    elif score == 0 and (advice := broken()) is not None:                          # 4
+        status, message = advice
+    return _with_notes(ev, CellVerdict(score, status, message))                   # 5
+
+
+def _with_notes(ev: CellEvidence, verdict: CellVerdict) -> CellVerdict:
+    """``verdict`` with the notes appended to its message, and whose answer a wrong item fits."""
+    ex, notes = ev.exercise, list(ev.notes)
+    fits = ""
+    if ex.kind.is_item and verdict.status is not Status.OK and ev.answer is not None:
+        fits = fits_other(ex, ev.answer, ev.others)
+    if fits and ev.reveal:
+        notes.append(fits_note(ex, fits, ev.student))
+    message = verdict.message + (". Note: " + "; ".join(notes) if notes else "")
+    return CellVerdict(verdict.score, verdict.status, message, tuple(notes), fits)
+
+
+def fits_other(ex: Exercise, answer: CaseOutcome, others) -> str:
+    """The first of ``others`` (ids the notebook names) whose numbers or letters this wrong
+    answer fits, else ``""``."""
+    for other in others:
+        try:
+            verdict, _ = judge_item(ex, answer, other)
+        except Exception:  # noqa: BLE001 - a note only; never fail the grading over it
+            continue
+        if verdict is Verdict.PASS:
+            return other
+    return ""
+
+
+def fits_note(ex: Exercise, other: str, student: str) -> str:
+    """What the student is told, once hidden tests are revealed, when their wrong item fits
+    another student's numbers or option letters."""
+    what = "option letters" if ex.kind is CellKind.CHOICE else "numbers"
+    return (f"this answer fits the {what} of student {other}, not yours ({student}): every "
+            f"student answers on their own {what}, and the grade uses yours")
 
 
 # --------------------------------------------------------------------------------------------

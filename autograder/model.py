@@ -18,12 +18,21 @@ from typing import Any
 
 
 class CellKind(str, enum.Enum):
-    """What kind of graded cell a row of the gradebook is."""
+    """What kind of graded cell an exercise (``Exercise.kind``) and a row of the gradebook are.
+
+    The one spelling of kinds in Python; their values are the strings of the wire (the sandbox's
+    jobs, the CSV files, the gradebook), converted at those edges only.
+    """
 
     FUNCTION = "function"   #: a graded function, run on visible and hidden cases
     CHOICE = "choice"       #: a multiple-choice variable (a string of option letters)
-    VALUE = "value"         #: a number item worked on the student's own numbers (issue 11)
+    VALUE = "value"         #: a number item worked on the student's own numbers
     MANUAL = "manual"       #: a written answer, marked by hand
+
+    @property
+    def is_item(self) -> bool:
+        """A choice or number item: judged on the literal its cell types, not on code run."""
+        return self in (CellKind.CHOICE, CellKind.VALUE)
 
 
 class OutcomeKind(str, enum.Enum):
@@ -177,9 +186,23 @@ class CaseRecord:
     printed: str = ""
 
 
+@dataclass(frozen=True)
+class CellVerdict:
+    """The judgement of one graded cell (``judging.judge_cell``): its score, status and message
+    (with its notes), the notes themselves, and whose answer a wrong item fits."""
+
+    score: float
+    status: Status
+    message: str
+    notes: tuple[str, ...] = ()
+    fits_other: str = ""            #: another student whose numbers or letters a wrong item fits
+
+
 @dataclass
 class CellResult:
-    """One graded cell of one student's notebook: a row of ``grades.csv`` and its feedback."""
+    """One graded cell of one student's notebook: a row of ``grades.csv`` and its feedback.
+
+    Built by keyword (every field after ``student`` and ``notebook`` names what it holds)."""
 
     student: str
     notebook: str
@@ -234,6 +257,19 @@ class SourceCell:
     meta: dict                      #: the cell's nbgrader metadata
 
 
+@dataclass(frozen=True)
+class GradedTest:
+    """An automatically graded exercise of a source notebook: the name the student defines, the
+    grade_id of its test cell and its points. Unpacks as ``name, test_id, points``."""
+
+    name: str
+    test_id: str
+    points: float
+
+    def __iter__(self):
+        return iter((self.name, self.test_id, self.points))
+
+
 @dataclass
 class SourceNotebook:
     """What the grader takes from the instructor's notebook (never from a submission)."""
@@ -244,8 +280,11 @@ class SourceNotebook:
     setup_source: str
     cells: list[SourceCell]
     solution_ids: list[str]         #: grade_ids of code solution cells, in order
-    graded: list[tuple[str, str, float]]   #: (name, test grade_id, points) of auto-graded tests
+    graded: list[GradedTest]        #: the auto-graded tests, in order (tuples are converted)
     manual: list[tuple[str, float]]        #: (grade_id, points) of manually graded answers
+
+    def __post_init__(self):
+        self.graded = [g if isinstance(g, GradedTest) else GradedTest(*g) for g in self.graded]
 
     def cell(self, grade_id: str) -> SourceCell | None:
         """The source cell whose grade_id is ``grade_id``, or None."""

@@ -23,14 +23,17 @@ import numpy as np
 from course_lib import variants
 from course_lib.answers import ChoiceFormatError, choice_letters
 
+from ..model import CellKind
+
 
 @dataclass(frozen=True)
 class Mismatch:
     """Why a received value does not match, as a comparison rule reports it.
 
-    A rule returns ``None`` when the answer matches. Otherwise it returns a ``Mismatch`` (built
-    with :func:`wrong_shape` or :func:`wrong_value`) or, as older rules do, a plain ``str``, which
-    counts as a wrong value. The grader classifies by ``kind``, never by the text.
+    A rule returns ``None`` when the answer matches, otherwise a ``Mismatch`` built with
+    :func:`wrong_shape` or :func:`wrong_value`: every rule of the registry speaks this one
+    protocol. The grader classifies by ``kind``, never by the text (:func:`as_mismatch` reads a
+    bare ``str`` from a rule written elsewhere as a wrong value, without parsing its words).
     """
 
     #: "wrong-value", "wrong-shape" (wrong shape, type or number of values) or, for a choice
@@ -42,7 +45,7 @@ class Mismatch:
         return self.text
 
     def __contains__(self, words: str) -> bool:
-        """``"words" in mismatch`` reads its text, as for a rule that returns a ``str``."""
+        """``"words" in mismatch`` reads its text."""
         return words in self.text
 
 
@@ -54,6 +57,14 @@ def wrong_shape(text: str) -> Mismatch:
 def wrong_value(text: str) -> Mismatch:
     """A rule's answer for a value of the right form but the wrong numbers."""
     return Mismatch("wrong-value", text)
+
+
+def as_mismatch(why) -> Mismatch | None:
+    """What a rule returned, as the one protocol: ``None`` (a match) or a :class:`Mismatch`;
+    anything else is a wrong value described by its text (its words are never parsed)."""
+    if why is None or isinstance(why, Mismatch):
+        return why
+    return wrong_value(str(why))
 
 
 @dataclass(frozen=True)
@@ -81,8 +92,8 @@ class Case:
 
 @dataclass(frozen=True)
 class Exercise:
-    """A graded function (``kind="function"``), a multiple-choice answer (``kind="choice"``) or
-    a number item on the student's own numbers (``kind="value"``, issue 11).
+    """A graded function (``CellKind.FUNCTION``), a multiple-choice answer (``CellKind.CHOICE``)
+    or a number item on the student's own numbers (``CellKind.VALUE``).
 
     ``name`` is the grade_id of the solution cell and the name the student defines; its test cell
     is ``test_<name>``. For a choice, ``answer`` is the correct option in the *canonical* order
@@ -95,14 +106,22 @@ class Exercise:
 
     name: str
     notebook: str
-    kind: str = "function"
+    kind: CellKind = CellKind.FUNCTION
     reference: Callable | None = None
     cases: Callable[[np.random.Generator], Iterable[Case]] | None = None
-    compare: Callable[[Any, Any], Mismatch | str | None] | None = None
+    compare: Callable[[Any, Any], Mismatch | None] | None = None
     answer: Any = None
     options: tuple = ()
     description: str = ""
     solve: Callable[[Any], Any] | None = None
+
+    def __post_init__(self):
+        try:
+            kind = CellKind(self.kind)
+        except ValueError:
+            raise ValueError(f"Exercise.kind of {self.name!r} must be one of "
+                             f"{[k.value for k in CellKind]}, got {self.kind!r}") from None
+        object.__setattr__(self, "kind", kind)
 
     def key_for(self, student: str | None) -> str:
         """A choice's key as the letters ``student`` sees (``None``: the canonical letters)."""
@@ -141,7 +160,7 @@ def up_to(wording: str) -> Callable[[Callable], Callable]:
     return mark
 
 
-#: The tolerance of every number item (issue 11), stated in each notebook: three significant
+#: The tolerance of every number item, stated in each notebook: three significant
 #: figures are enough.
 NUMBER_RTOL, NUMBER_ATOL = 5e-3, 1e-3
 
@@ -151,7 +170,7 @@ def number_item(name: str, notebook: str, solve: Callable[[Any], Any],
     """A number item worked on the student's own numbers: ``solve(variant)`` gives the answer
     with the course's references; by default (:func:`numbers_close`) answers within 0.5 % (or
     0.001) of it pass."""
-    return Exercise(name=name, notebook=notebook, kind="value", solve=solve,
+    return Exercise(name=name, notebook=notebook, kind=CellKind.VALUE, solve=solve,
                     compare=compare or numbers_close, description=description)
 
 

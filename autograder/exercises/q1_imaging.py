@@ -12,6 +12,7 @@ import numpy as np
 
 from course_lib import ultrasound
 
+from ..model import CellKind
 from .base import Case, Exercise, close, number_item
 
 # speeds (m/s) and attenuations (dB/cm/MHz) of the course's material table
@@ -117,23 +118,23 @@ EXERCISES = [
              cases=_round_trip_cases, compare=_rel,
              description="Q1(c): two-way attenuation in dB through a stack of layers"),
     # Q1(a)(i): planar X-ray = line integral of attenuation
-    Exercise(name="q1_item1", notebook="q1_imaging", kind="choice", answer="c",
+    Exercise(name="q1_item1", notebook="q1_imaging", kind=CellKind.CHOICE, answer="c",
              options=_choices, description="Q1(a)(i) planar X-ray brightness"),
     # Q1(a)(ii): CT = attenuation at one point (Hounsfield units)
-    Exercise(name="q1_item2", notebook="q1_imaging", kind="choice", answer="d",
+    Exercise(name="q1_item2", notebook="q1_imaging", kind=CellKind.CHOICE, answer="d",
              options=_choices, description="Q1(a)(ii) CT brightness"),
     # Q1(a)(iii): PET = local rate of positron annihilations of the tracer
-    Exercise(name="q1_item3", notebook="q1_imaging", kind="choice", answer="b",
+    Exercise(name="q1_item3", notebook="q1_imaging", kind=CellKind.CHOICE, answer="b",
              options=_choices, description="Q1(a)(iii) PET brightness"),
     # Q1(a)(iv): B-scan = local back-scatter, weakened by the attenuation above
-    Exercise(name="q1_item4", notebook="q1_imaging", kind="choice", answer="a",
+    Exercise(name="q1_item4", notebook="q1_imaging", kind=CellKind.CHOICE, answer="a",
              options=_choices, description="Q1(a)(iv) B-scan brightness"),
     # Q1(b): select all that apply
-    Exercise(name="q1_item5", notebook="q1_imaging", kind="choice",
+    Exercise(name="q1_item5", notebook="q1_imaging", kind=CellKind.CHOICE,
              answer=frozenset({"a", "c"}), options=_choices,
              description="Q1(b) why combine PET and CT (all that apply)"),
     # Q1(c): which way does the floor move under the liver
-    Exercise(name="q1_item6", notebook="q1_imaging", kind="choice", answer="b",
+    Exercise(name="q1_item6", notebook="q1_imaging", kind=CellKind.CHOICE, answer="b",
              options=_choices, description="Q1(c) displayed bath floor under the liver"),
 ]
 

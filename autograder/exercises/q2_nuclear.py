@@ -14,7 +14,8 @@ import numpy as np
 
 from course_lib import gamma_camera
 
-from .base import Case, Exercise, close, number_item, up_to, wrong_shape
+from ..model import CellKind
+from .base import Case, Exercise, close, number_item, up_to, wrong_shape, wrong_value
 
 NB = "q2_nuclear"
 _REL = close(rtol=1e-9, atol=1e-12)
@@ -89,7 +90,7 @@ def _same_points(tol=1e-9):
         if r.shape != e.shape:
             return wrong_shape(f"wrong shape (expected {e.shape}, got {r.shape})")
         if not np.all(np.isfinite(r)):
-            return "wrong value (NaN or inf in the answer)"
+            return wrong_value("wrong value (NaN or inf in the answer)")
         if e.size == 0:
             return None
         scale = max(1.0, float(np.abs(e).max()))
@@ -98,9 +99,9 @@ def _same_points(tol=1e-9):
         missing = dist[np.arange(len(e)), nearest] > tol * scale
         if np.any(missing):
             x, y = e[np.flatnonzero(missing)[0]]
-            return f"no hole at ({x:.4g}, {y:.4g}) ({int(missing.sum())} holes missing)"
+            return wrong_value(f"no hole at ({x:.4g}, {y:.4g}) ({int(missing.sum())} holes missing)")
         if len(np.unique(nearest)) != len(e):
-            return "some holes are repeated"
+            return wrong_value("some holes are repeated")
         return None
 
     rule.__doc__ = "the same set of points, in any order, within 1e-9 (relative)"
@@ -179,22 +180,22 @@ EXERCISES = [
     _function("open_fraction", gamma_camera.open_fraction, _open_fraction_cases,
               "Q2(d) all-or-nothing model: open area / face area"),
     # Q2(a): why each dynode is more positive than the last
-    Exercise(name="q2_item1", notebook=NB, kind="choice", answer="c",
+    Exercise(name="q2_item1", notebook=NB, kind=CellKind.CHOICE, answer="c",
              options=_ABCD, description="Q2(a) the rising dynode potentials accelerate the "
                                         "electrons so that each impact frees several"),
     # Q2(b): select all that apply
-    Exercise(name="q2_item2", notebook=NB, kind="choice",
+    Exercise(name="q2_item2", notebook=NB, kind=CellKind.CHOICE,
              answer=frozenset({"a", "b", "c"}), options=("a", "b", "c", "d", "e"),
              description="Q2(b) proportional output, fast, efficient (not densely packed)"),
     # Q2(b): what the proportional output is good for
-    Exercise(name="q2_item3", notebook=NB, kind="choice", answer="b",
+    Exercise(name="q2_item3", notebook=NB, kind=CellKind.CHOICE, answer="b",
              options=_ABCD, description="Q2(b) pulse height proportional to energy lets the "
                                         "camera reject scattered photons"),
     # Q2(c): longer holes
-    Exercise(name="q2_item4", notebook=NB, kind="choice", answer="d",
+    Exercise(name="q2_item4", notebook=NB, kind=CellKind.CHOICE, answer="d",
              options=_ABCD, description="Q2(c) longer holes: better resolution, fewer photons"),
     # Q2(d): the exam's model against straight-ray geometry
-    Exercise(name="q2_item5", notebook=NB, kind="choice", answer="a",
+    Exercise(name="q2_item5", notebook=NB, kind=CellKind.CHOICE, answer="a",
              options=_ABCD, description="Q2(d) all-or-nothing overstates the transmission"),
 ]
 

@@ -26,8 +26,9 @@ import numpy as np
 from course_lib import marching_cubes as mc
 from course_lib import mesh
 
-from .base import (Case, Exercise, Mismatch, close, describe, number_item, same_integer,
-                   up_to, wrong_shape)
+from ..model import CellKind
+from .base import (Case, Exercise, Mismatch, close, describe, number_item, same_integer, up_to,
+                   wrong_shape, wrong_value)
 
 NB = "q3_marching_cubes"
 
@@ -43,67 +44,70 @@ def _sorted_rows(a: np.ndarray, decimals: int = 6) -> np.ndarray:
 
 @up_to("vertex order, triangle order, the first vertex of each triangle and the winding of "
        "the whole mesh")
-def same_mesh(expected, received, atol: float = 1e-6, rtol: float = 1e-6) -> str | None:
+def same_mesh(expected, received, atol: float = 1e-6, rtol: float = 1e-6) -> Mismatch | None:
     """Meshes equal up to vertex order, face order, the start of each face and global winding.
 
     Checks, in order: ``(verts (V, 3), faces (F, 3) int)``; indices in range; the same number
     of vertices and faces; the same vertex positions as a set; every edge shared by two faces in
     opposite directions exactly when the expected mesh is; the same absolute enclosed volume and
-    the same surface area.
+    the same surface area. Arrays of the wrong form (not arrays, not ``(V, 3)`` or ``(F, 3)``,
+    not numbers) are wrong values whose text names the form (so the summary words of q3's
+    grades stay comparable between terms); a tuple of another length and non-integer faces are
+    wrong shapes.
     """
     if not isinstance(received, tuple) or len(received) != 2:
         return wrong_shape(f"wrong type (expected a tuple (verts, faces), got {describe(received)})")
     ev, ef = expected
     rv, rf = received
     if not isinstance(rv, np.ndarray) or not isinstance(rf, np.ndarray):
-        return "verts and faces must be NumPy arrays"
+        return wrong_value("verts and faces must be NumPy arrays")
     if rv.size == 0:
         rv = rv.reshape(0, 3)
     if rv.ndim != 2 or rv.shape[1] != 3:
-        return f"verts must have shape (V, 3), got {rv.shape}"
+        return wrong_value(f"verts must have shape (V, 3), got {rv.shape}")
     if rv.dtype.kind not in "iuf":
-        return f"verts must be numbers, got dtype {rv.dtype}"
+        return wrong_value(f"verts must be numbers, got dtype {rv.dtype}")
     rv = rv.astype(float)
     if rf.size == 0:
         rf = rf.reshape(0, 3)
     if rf.ndim != 2 or rf.shape[1] != 3:
-        return f"faces must have shape (F, 3), got {rf.shape}"
+        return wrong_value(f"faces must have shape (F, 3), got {rf.shape}")
     if rf.dtype.kind not in "iu":
         if rf.dtype.kind == "f" and np.all(rf == np.round(rf)):
             rf = rf.astype(np.int64)
         else:
             return wrong_shape(f"faces must hold integer vertex indices, got dtype {rf.dtype}")
     if rf.size and (rf.min() < 0 or rf.max() >= len(rv)):
-        return "faces index vertices that do not exist"
+        return wrong_value("faces index vertices that do not exist")
     if len(rv) != len(ev):
         return wrong_shape(f"wrong number of vertices (expected {len(ev)}, one per crossed grid "
                            f"edge; got {len(rv)})")
     if len(rf) != len(ef):
         return wrong_shape(f"wrong number of triangles (expected {len(ef)}, got {len(rf)})")
     if not np.all(np.isfinite(rv)):
-        return "NaN or inf among the vertices"
+        return wrong_value("NaN or inf among the vertices")
     if len(ev) and not np.allclose(_sorted_rows(rv), _sorted_rows(ev), atol=atol, rtol=0):
-        return ("the vertex positions differ (check the interpolation along each edge and the "
-                "mapping of index (i, j, k) to (i*sx, j*sy, k*sz))")
+        return wrong_value("the vertex positions differ (check the interpolation along each edge and the "
+                           "mapping of index (i, j, k) to (i*sx, j*sy, k*sz))")
     if len(ef) == 0:
         return None
     closed = mesh.is_closed_consistent(ef)
     if mesh.is_closed_consistent(rf) != closed:
         if closed:
-            return ("the mesh is not closed and consistently wound (vertices not shared between "
-                    "cells, or triangles ordered inconsistently)")
-        return "the mesh is closed where it should leave the volume"
+            return wrong_value("the mesh is not closed and consistently wound (vertices not shared between "
+                               "cells, or triangles ordered inconsistently)")
+        return wrong_value("the mesh is closed where it should leave the volume")
     if closed:
         ve, vr = mesh.mesh_volume(ev, ef), mesh.mesh_volume(rv, rf)
         if not np.isclose(abs(vr), abs(ve), rtol=rtol, atol=1e-9):
-            return f"wrong enclosed volume (expected {abs(ve):.6g}, got {abs(vr):.6g})"
+            return wrong_value(f"wrong enclosed volume (expected {abs(ve):.6g}, got {abs(vr):.6g})")
     ae, ar = mesh.surface_area(ev, ef), mesh.surface_area(rv, rf)
     if not np.isclose(ar, ae, rtol=rtol, atol=1e-9):
-        return f"wrong surface area (expected {ae:.6g}, got {ar:.6g}): different triangles"
+        return wrong_value(f"wrong surface area (expected {ae:.6g}, got {ar:.6g}): different triangles")
     return None
 
 
-def _as_edge_triangles(received) -> np.ndarray | str:
+def _as_edge_triangles(received) -> np.ndarray | Mismatch:
     """``received`` as an int64 ``(t, 3)`` array, or the reason it is not one."""
     if not isinstance(received, np.ndarray):
         return wrong_shape(f"wrong type (expected a NumPy array of shape (t, 3), got {describe(received)})")
@@ -113,7 +117,7 @@ def _as_edge_triangles(received) -> np.ndarray | str:
         return wrong_shape(f"wrong shape (expected (t, 3) edge numbers, got {received.shape})")
     if received.dtype.kind not in "iu":
         if received.dtype.kind != "f" or not np.all(received == np.round(received)):
-            return f"the triangles must hold integer edge numbers, got dtype {received.dtype}"
+            return wrong_value(f"the triangles must hold integer edge numbers, got dtype {received.dtype}")
     return received.astype(np.int64)
 
 
@@ -131,7 +135,7 @@ def _case_of_answer() -> dict[bytes, int]:
 
 @up_to("triangle order and the first edge of each triangle (any triangulation of the joined "
        "contour passes)")
-def same_joined_patch(expected, received) -> str | None:
+def same_joined_patch(expected, received) -> Mismatch | None:
     """Any triangulation of the joined contour of the expected case, up to vertex order.
 
     The case is the one whose reference answer ``expected`` is. ``received`` must be ``(t, 3)``
@@ -142,34 +146,34 @@ def same_joined_patch(expected, received) -> str | None:
     """
     index = _case_of_answer()[np.asarray(expected, dtype=np.int64).tobytes()]
     tris = _as_edge_triangles(received)
-    if isinstance(tris, (str, Mismatch)):
+    if isinstance(tris, Mismatch):
         return tris
     if len(tris) != len(expected):
-        return (f"wrong number of triangles (expected {len(expected)}: n - 2 for each loop of "
-                f"n crossing points; got {len(tris)})")
+        return wrong_value(f"wrong number of triangles (expected {len(expected)}: n - 2 for each loop of "
+                           f"n crossing points; got {len(tris)})")
     if tris.size and (tris.min() < 0 or tris.max() > 11):
-        return "edge numbers must be 0 ... 11"
+        return wrong_value("edge numbers must be 0 ... 11")
     crossed = [e for e in range(12) if (int(mc.EDGE_TABLE[index]) >> e) & 1]
     if not np.all(np.isin(tris, crossed)):
-        return f"a triangle uses an edge the case does not cross (crossed edges: {crossed})"
+        return wrong_value(f"a triangle uses an edge the case does not cross (crossed edges: {crossed})")
     for tri in tris.tolist():
         if len(set(tri)) < 3:
-            return f"the triangle {tri} repeats an edge"
+            return wrong_value(f"the triangle {tri} repeats an edge")
         if _FACES_OF_EDGE[tri[0]] & _FACES_OF_EDGE[tri[1]] & _FACES_OF_EDGE[tri[2]]:
-            return f"the triangle {tri} lies flat in a face of the cube"
+            return wrong_value(f"the triangle {tri} lies flat in a face of the cube")
     _, faces = mc.probe_triangulation(index, tris)
     if not mesh.is_closed_consistent(faces):
-        return ("the surface does not close up with neighbours that join the inside corners on "
-                "every ambiguous face (check which crossings you join on each ambiguous face, "
-                "and that the triangles are wound anticlockwise seen from outside)")
+        return wrong_value("the surface does not close up with neighbours that join the inside corners on "
+                           "every ambiguous face (check which crossings you join on each ambiguous face, "
+                           "and that the triangles are wound anticlockwise seen from outside)")
     return None
 
 
-def same_bool(expected, received) -> str | None:
+def same_bool(expected, received) -> Mismatch | None:
     """A Python bool (NumPy's ``np.bool_`` accepted) equal to the expected one."""
     if not isinstance(received, bool):
         return wrong_shape(f"wrong type (expected True or False, got {describe(received)})")
-    return None if received == expected else f"wrong answer (expected {expected})"
+    return None if received == expected else wrong_value(f"wrong answer (expected {expected})")
 
 
 # ------------------------------------------------------------------------------------------------
@@ -370,7 +374,7 @@ def _closed_cases(rng):
 
 
 def _choice(name, answer, description, options=("a", "b", "c", "d")):
-    return Exercise(name=name, notebook=NB, kind="choice", answer=answer, options=options,
+    return Exercise(name=name, notebook=NB, kind=CellKind.CHOICE, answer=answer, options=options,
                     description=description)
 
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from course_lib import splines
 
+from ..model import CellKind
 from .base import Case, Exercise, close, number_item
 
 NB = "q4_splines"
@@ -191,23 +192,23 @@ EXERCISES = [
               "Q4(c)(i) the invented end point d"),
     _function("sample_curve", splines.sample_curve, _sample_curve_cases,
               "Q4(c)(i) a multi-segment curve with or without phantom end points"),
-    Exercise(name="q4_item1", notebook=NB, kind="choice", answer="b",
+    Exercise(name="q4_item1", notebook=NB, kind=CellKind.CHOICE, answer="b",
              options=("a", "b", "c", "d"),
              description="Q4(a) control points needed for N segments: N + 3"),
-    Exercise(name="q4_item2", notebook=NB, kind="choice",
+    Exercise(name="q4_item2", notebook=NB, kind=CellKind.CHOICE,
              answer=frozenset({"b", "d", "e"}), options=("a", "b", "c", "d", "e"),
              description="Q4(a) interpolation, continuity, shared geometry (not: B-spline "
                          "through its ends, Catmull-Rom in the hull)"),
-    Exercise(name="q4_item4", notebook=NB, kind="choice", answer="b",
+    Exercise(name="q4_item4", notebook=NB, kind=CellKind.CHOICE, answer="b",
              options=("a", "b", "c", "d"),
              description="Q4(c)(i) with d = b the B-spline stops at (b + 2c)/3, at rest"),
-    Exercise(name="q4_item5", notebook=NB, kind="choice",
+    Exercise(name="q4_item5", notebook=NB, kind=CellKind.CHOICE,
              answer=frozenset({"a", "b", "d"}), options=("a", "b", "c", "d", "e"),
              description="Q4(c)(i) which spline and rule end on the last given point"),
-    Exercise(name="q4_item7", notebook=NB, kind="choice", answer="c",
+    Exercise(name="q4_item7", notebook=NB, kind=CellKind.CHOICE, answer="c",
              options=("a", "b", "c", "d"),
              description="Q4(c)(ii) d = b suits Catmull-Rom: the end tangent is not imposed"),
-    Exercise(name="q4_item8", notebook=NB, kind="choice", answer="b",
+    Exercise(name="q4_item8", notebook=NB, kind=CellKind.CHOICE, answer="b",
              options=("a", "b", "c", "d"),
              description="Q4(c)(ii) B-spline: d = b rests at (b+2c)/3, d = 2c - b ends on c moving"),
 ]

@@ -15,6 +15,7 @@ import numpy as np
 
 from course_lib import shading
 
+from ..model import CellKind
 from .base import Case, Exercise, close, number_item
 
 NB = "q5_phong"
@@ -180,16 +181,16 @@ EXERCISES = [
     _function("blinn_phong", shading.blinn_phong, _model_cases,
               "Q5(c) the Blinn-Phong model, (N.H)^n"),
     # Q5(a), Item Q5.1: what the specular exponent does
-    Exercise(name="q5_item1", notebook=NB, kind="choice", answer="b",
+    Exercise(name="q5_item1", notebook=NB, kind=CellKind.CHOICE, answer="b",
              options=_choices, description="Q5(a) Item Q5.1: the role of n"),
     # Q5(c), Item Q5.2: when N.H saves work
-    Exercise(name="q5_item2", notebook=NB, kind="choice", answer="c",
+    Exercise(name="q5_item2", notebook=NB, kind=CellKind.CHOICE, answer="c",
              options=_choices, description="Q5(c) Item Q5.2: when the half-way vector is cheaper"),
     # Q5(d), Item Q5.3: the cause of colour aliasing
-    Exercise(name="q5_item3", notebook=NB, kind="choice", answer="c",
+    Exercise(name="q5_item3", notebook=NB, kind=CellKind.CHOICE, answer="c",
              options=_choices, description="Q5(d) Item Q5.3: why three samples alias"),
     # Q5(d), Item Q5.4: what reduces it (all that apply)
-    Exercise(name="q5_item4", notebook=NB, kind="choice",
+    Exercise(name="q5_item4", notebook=NB, kind=CellKind.CHOICE,
              answer=frozenset({"a", "c"}), options=_choices,
              description="Q5(d) Item Q5.4: remedies for colour aliasing (all that apply)"),
 ]

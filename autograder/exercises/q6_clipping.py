@@ -20,7 +20,9 @@ import numpy as np
 
 from course_lib import clipping
 
-from .base import Case, Exercise, close, describe, number_item, up_to, wrong_shape
+from ..model import CellKind
+from .base import (Case, Exercise, Mismatch, close, describe, number_item, up_to, wrong_shape,
+                   wrong_value)
 
 #: The exam's triangles in homogeneous screen coordinates (see the module docstring).
 EXAM_A = np.array(clipping.EXAM_Q6["A"])
@@ -48,7 +50,7 @@ def _drop_repeats(U: np.ndarray, atol: float) -> np.ndarray:
 
 
 @up_to("the starting vertex and a positive scale of each homogeneous vertex")
-def same_polygon(expected, received, atol: float = 1e-7) -> str | None:
+def same_polygon(expected, received, atol: float = 1e-7) -> Mismatch | None:
     """Homogeneous polygons equal up to a cyclic shift and a positive scale per vertex.
 
     Each vertex is scaled to unit length (a positive scale changes nothing projectively, a
@@ -66,12 +68,12 @@ def same_polygon(expected, received, atol: float = 1e-7) -> str | None:
         if len(e) == len(r):
             return None
         if len(e) == 0:
-            return f"expected an empty (0, 4) array (nothing is left), got {len(r)} vertices"
-        return "expected a polygon, got an empty array"
+            return wrong_value(f"expected an empty (0, 4) array (nothing is left), got {len(r)} vertices")
+        return wrong_value("expected a polygon, got an empty array")
     if not np.all(np.isfinite(r)):
-        return "wrong value (NaN or inf in the answer)"
+        return wrong_value("wrong value (NaN or inf in the answer)")
     if np.any(np.all(r == 0, axis=1)):
-        return "a vertex is [0, 0, 0, 0], which is not a point"
+        return wrong_value("a vertex is [0, 0, 0, 0], which is not a point")
     E = _drop_repeats(_unit_rows(e), atol)
     R = _drop_repeats(_unit_rows(r), atol)
     if len(E) != len(R):
@@ -81,24 +83,24 @@ def same_polygon(expected, received, atol: float = 1e-7) -> str | None:
             return None
     for shift in range(len(R)):
         if np.allclose(np.roll(R[::-1], -shift, axis=0), E, atol=atol, rtol=0):
-            return "the vertices are right but in reverse order (orientation flipped)"
-    return "wrong vertices (no cyclic shift matches, even allowing a positive scale per vertex)"
+            return wrong_value("the vertices are right but in reverse order (orientation flipped)")
+    return wrong_value("wrong vertices (no cyclic shift matches, even allowing a positive scale per vertex)")
 
 
-def same_span(expected, received) -> str | None:
+def same_span(expected, received) -> Mismatch | None:
     """``None`` against ``None``; otherwise a tuple ``(x_left, x_right)`` within tolerance."""
     if expected is None:
         if received is None:
             return None
-        return f"the line misses the triangle: expected None, got {describe(received)}"
+        return wrong_value(f"the line misses the triangle: expected None, got {describe(received)}")
     if received is None:
-        return "the line crosses the triangle: expected (x_left, x_right), got None"
+        return wrong_value("the line crosses the triangle: expected (x_left, x_right), got None")
     if not isinstance(received, tuple) or len(received) != 2:
         return wrong_shape(f"wrong type (expected a tuple (x_left, x_right), got {describe(received)})")
     return close(rtol=1e-7, atol=1e-9)(expected, received)
 
 
-def same_ints(expected, received) -> str | None:
+def same_ints(expected, received) -> Mismatch | None:
     """Integer arrays equal exactly (same shape, same values)."""
     if not isinstance(received, np.ndarray):
         return wrong_shape(f"wrong type (expected an integer array, got {describe(received)})")
@@ -110,11 +112,11 @@ def same_ints(expected, received) -> str | None:
     if received.shape != expected.shape:
         return wrong_shape(f"wrong shape (expected {expected.shape}, got {received.shape})")
     if not np.array_equal(received, expected):
-        return "wrong indices"
+        return wrong_value("wrong indices")
     return None
 
 
-def same_bools(expected, received) -> str | None:
+def same_bools(expected, received) -> Mismatch | None:
     """Boolean arrays (or one bool) equal exactly, same shape."""
     e = np.asarray(expected)
     if isinstance(received, bool):
@@ -125,7 +127,7 @@ def same_bools(expected, received) -> str | None:
         return wrong_shape(f"wrong shape (expected {e.shape}, got {received.shape})")
     bad = np.flatnonzero(received.ravel() != e.ravel())
     if bad.size:
-        return f"wrong answer for {bad.size} vertex(es) (first at flat index {bad[0]})"
+        return wrong_value(f"wrong answer for {bad.size} vertex(es) (first at flat index {bad[0]})")
     return None
 
 
@@ -257,7 +259,7 @@ def _span_cases(rng):
 
 
 def _choice(name, answer, description, options=("a", "b", "c", "d")):
-    return Exercise(name=name, notebook=NB, kind="choice", answer=answer, options=options,
+    return Exercise(name=name, notebook=NB, kind=CellKind.CHOICE, answer=answer, options=options,
                     description=description)
 
 

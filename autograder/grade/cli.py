@@ -30,6 +30,7 @@ from ..isolation import UNSAFE_WARNING, IsolationUnavailable, Limits, Mode, prob
 from ..outputs import csv as csv_output
 from ..outputs import feedback, gradebook, items, report
 from ..exercises import REGISTRY
+from ..model import CellKind
 from ..course import default_db_url
 from ..outputs.gradebook_url import MissingDriver, resolve_db_url
 from ..outputs.similarity import reference_source
@@ -247,6 +248,6 @@ def reference_sources(results) -> dict[str, str]:
     out = {}
     for name in sorted(names):
         reference = REGISTRY[name].reference
-        if REGISTRY[name].kind == "function" and reference is not None:
+        if REGISTRY[name].kind is CellKind.FUNCTION and reference is not None:
             out[name] = reference_source(reference)
     return out

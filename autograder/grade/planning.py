@@ -149,7 +149,7 @@ class CellPlan:
 def plan_cells(src: SourceNotebook, sub: Submission) -> CellPlan:
     """Pick the solution cells to run: by grade_id, else (metadata stripped) by definition."""
     sol_ids = set(src.solution_ids)
-    names = [g[0] for g in src.graded]
+    names = [g.name for g in src.graded]
     notes: dict[str, list[str]] = {n: [] for n in names}
     by_id: dict[str, list[int]] = {}
     for k, c in enumerate(sub.cells):

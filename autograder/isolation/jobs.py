@@ -10,9 +10,23 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-FUNCTION = "function"   #: a graded function, called once per case
-CHOICE = "choice"       #: a multiple-choice variable: its one case's "result" is its value
+from ..model import CellKind
+
+#: The kinds of a job's names, as the wire spells them (the values of
+#: :class:`~autograder.model.CellKind`): a function is called once per case; a choice or
+#: number item is a variable whose one case's "result" is its value.
+FUNCTION = CellKind.FUNCTION.value
+CHOICE = CellKind.CHOICE.value
 KINDS = (FUNCTION, CHOICE)
+
+
+def wire_kind(kind: CellKind) -> str:
+    """How the sandbox runs a graded cell of ``kind``: ``FUNCTION`` for a graded function,
+    ``CHOICE`` (read a variable) for a choice or number item."""
+    kind = CellKind(kind)
+    if kind is CellKind.MANUAL:
+        raise ValueError("a written answer (CellKind.MANUAL) is not run in the sandbox")
+    return FUNCTION if kind is CellKind.FUNCTION else CHOICE
 
 
 @dataclass(frozen=True)
@@ -56,7 +70,7 @@ class NameJob:
     """
 
     name: str
-    kind: str
+    kind: str                       #: ``FUNCTION`` or ``CHOICE``, as :func:`wire_kind` gives it
     cells: list[tuple[str, str]]
     cases: list[CaseInput] = field(default_factory=list)
 

@@ -14,6 +14,7 @@ from course_lib import variants
 from course_lib.answers import choice_letters
 
 from ..exercises import REGISTRY
+from ..model import CellKind
 
 
 def choice_legend(name: str, student: str, answer=None) -> str:
@@ -21,7 +22,7 @@ def choice_legend(name: str, student: str, answer=None) -> str:
     answer 'b' is (a) here``; ``""``
     for a name that is not a choice item (or an id the variants refuse)."""
     ex = REGISTRY.get(name)
-    if ex is None or ex.kind != "choice" or not ex.options:
+    if ex is None or ex.kind is not CellKind.CHOICE or not ex.options:
         return ""
     n = len(ex.options)
     try:

@@ -98,7 +98,7 @@ def gradebook_knows(db_url: str, sources: list[SourceNotebook]) -> bool:
             except MissingEntry:
                 return False
             for src in sources:
-                for gid in [g[1] for g in src.graded] + [m[0] for m in src.manual]:
+                for gid in [g.test_id for g in src.graded] + [m[0] for m in src.manual]:
                     try:
                         gb.find_grade_cell(gid, src.name, ASSIGNMENT)
                     except MissingEntry:

@@ -22,19 +22,20 @@ from course_lib import variants
 
 from ..exercises import REGISTRY
 from ..exercises.base import choice_key
+from ..model import CellKind
 
 
 @functools.cache
 def choice_items() -> dict[str, tuple[str, str]]:
     """``{graded name: (canonical key, option letters)}`` of every choice item."""
     return {name: (choice_key(ex.answer), variants.LETTERS[:len(ex.options)])
-            for name, ex in REGISTRY.items() if ex.kind == "choice"}
+            for name, ex in REGISTRY.items() if ex.kind is CellKind.CHOICE}
 
 
 def item_kind(name: str) -> str:
     """The registry's kind of graded name ``name`` (``function``, ``choice``, ``value``), or ``""``."""
     ex = REGISTRY.get(name)
-    return ex.kind if ex is not None else ""
+    return ex.kind.value if ex is not None else ""
 
 
 def canonical_choice(name: str, typed, student: str) -> str | None:

@@ -141,7 +141,7 @@ def _distributions(results, sources) -> list[str]:
     for src in sources:
         per = totals.get(src.name, {})
         scores = [v[0] for v in per.values()]
-        top = max((v[1] for v in per.values()), default=sum(g[2] for g in src.graded))
+        top = max((v[1] for v in per.values()), default=sum(g.points for g in src.graded))
         mean = sum(scores) / len(scores) if scores else 0.0
         out.append(f"<div class='card'><b>{e(src.name)}</b> <span class='note'>({len(scores)} "
                    f"submitted; auto-graded out of {top:g}; mean {mean:.2f})</span><br>"

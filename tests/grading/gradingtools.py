@@ -271,7 +271,29 @@ def run_grade(submitted: Path, out: Path, *extra: str, jobs: int = 2,
     proc = subprocess.run(cmd, cwd=REPO, env=env, capture_output=True, text=True, timeout=900)
     if check and proc.returncode != 0:
         raise AssertionError(f"grade exited {proc.returncode}:\n{proc.stderr[-4000:]}")
+    _snapshot(out)
     return proc
+
+
+def _snapshot(out: Path) -> None:
+    """With ``GRADES_SNAPSHOT=<dir>``, keep a copy of this run's grades and feedback there, named
+    by the test that ran it, for ``tests/tools/compare_grades.py`` (grades byte-identical before
+    and after a refactor; run pytest with a fixed ``--basetemp`` so paths agree)."""
+    target = os.environ.get("GRADES_SNAPSHOT")
+    if not target or not (out / "grades.csv").is_file():
+        return
+    import shutil
+
+    test = os.environ.get("PYTEST_CURRENT_TEST", "no-test").split(" ")[0]
+    stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", test)
+    n = 0
+    while (Path(target) / f"{stem}--{n}").exists():
+        n += 1
+    dest = Path(target) / f"{stem}--{n}"
+    dest.mkdir(parents=True)
+    shutil.copyfile(out / "grades.csv", dest / "grades.csv")
+    if (out / "feedback").is_dir():
+        shutil.copytree(out / "feedback", dest / "feedback")
 
 
 def read_grades(out: Path) -> dict[tuple[str, str, str], dict]:

@@ -1,5 +1,5 @@
 """Judging and planning on their own (no sandbox): verdicts come from structured fields, the
-source of a graded cell says whether it was answered (issue 9), seeds follow the solution."""
+source of a graded cell says whether it was answered, seeds follow the solution."""
 
 from __future__ import annotations
 
@@ -113,7 +113,7 @@ def test_reference_imports_are_found_but_data_tables_are_allowed():
 
 def test_hidden_seed_follows_every_character_of_the_solution():
     """The sandbox's code can read its cells' text: a comment or a space could carry a lookup
-    table, so they too draw new hidden cases (red team N1)."""
+    table, so they too draw new hidden cases."""
     a = solution_digest("def f(x):\n    return x  # one\n")
     assert a == solution_digest("def f(x):\n    return x  # one\n")
     assert a != solution_digest("def f(x):\n    return x  # two\n")
@@ -149,7 +149,7 @@ def test_result_cap_follows_the_expected_answer():
 
 
 def test_a_wrong_number_item_never_says_how_far_off():
-    """The size of the error would give a one-number answer away (issue 11)."""
+    """The size of the error would give a one-number answer away."""
     from autograder.exercises import REGISTRY
     from autograder.judging import judge_value
     from autograder.model import CaseOutcome, OutcomeKind, Verdict
@@ -168,7 +168,7 @@ def test_a_wrong_number_item_never_says_how_far_off():
 
 
 def test_a_case_number_item_is_exact():
-    """Red-team F6: 0.5 % of 200 is a whole case number; a case number must match exactly."""
+    """0.5 % of 200 is a whole case number; a case number must match exactly."""
     from autograder.exercises import REGISTRY
     from autograder.judging import judge_value
     from autograder.model import CaseOutcome, OutcomeKind, Verdict
@@ -186,7 +186,7 @@ def test_a_case_number_item_is_exact():
 def test_hidden_seed_follows_where_the_solution_cells_stand(tmp_path):
     """A cell's label (its graded name and its place in the notebook) reaches the sandbox, so it
     seeds the hidden cases too: the same code with empty cells moved about, which could carry
-    answers into the sandbox in the labels, draws new cases (red team 11)."""
+    answers into the sandbox in the labels, draws new cases."""
     import json
 
     from autograder.grade.cases import job_digest
@@ -214,7 +214,7 @@ def test_hidden_seed_follows_where_the_solution_cells_stand(tmp_path):
 
 def test_a_notebook_of_countless_empty_cells_is_unreadable_at_once(tmp_path):
     """700,000 empty cells are 22 MB on disk and no code, yet planning them held the whole batch
-    for minutes and a gigabyte (red team 11): such a notebook is refused as it is read."""
+    for minutes and a gigabyte: such a notebook is refused as it is read."""
     import json
 
     from autograder.grade.reading import MAX_CELLS, read_submission
