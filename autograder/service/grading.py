@@ -132,7 +132,7 @@ def _grade(svc: Service, row: Row, collected: Path) -> list[NotebookOutcome]:
         auto = [r for r in rows if r.kind is not CellKind.MANUAL]
         score = sum(r.score or 0.0 for r in auto)
         outcomes.append(NotebookOutcome(src.name, d, True, score, sum(r.max_score for r in auto),
-                                        tuple((r.grade_id, r.score, r.max_score, r.status.value)
+                                        tuple((r.name, r.score, r.max_score, r.status.value)
                                               for r in rows)))
         render = pages.open_page if svc.policy.is_open(dt.datetime.now(dt.timezone.utc)) \
             else pages.closed_page

@@ -47,7 +47,7 @@ def test_probing_a_choice_item_learns_nothing(service, q1):
     ex = REGISTRY[item]
     options = list(ex.options)
     right = ex.key_for(STUDENT)
-    answers = options + [options[0]]         # every option, then one more: the budget is spent
+    answers = options + options[:2]     # every option, the budget (5) spent, then one more
     folders, pages = _probe(svc, q1, item, answers)
     # the grader knew: the right letter scored full marks, every other none (registry's key)
     scores = _scores(svc, item)
