@@ -80,3 +80,18 @@ def exchange_page(svc: Service, folder: str, notebook: str) -> str:
     path = svc.exchange / COURSE_ID / "feedback" / \
         f"{notebook_hash(secret=secret, notebook_id=notebook)}.html"
     return path.read_text(encoding="utf-8")
+
+
+def reopen_service(tmp: Path, mode) -> Service:
+    """The service :func:`make_service` built under ``tmp``, opened again (a restart)."""
+    from gradingtools import course_sources
+
+    course, exchange = tmp / "course", tmp / "exchange"
+    limits = Limits(case_timeout=CASE_TIMEOUT, load_timeout=30.0)
+    opts = Options(out=course / "service", jobs=2, limits=limits, secret=SECRET, mode=mode,
+                   progress=False)
+    sources = course_sources()
+    return Service(course, exchange / COURSE_ID / "inbound", exchange,
+                   Journal(course / "service" / "journal.db"), Policy(), sources, opts,
+                   {s.name: 60.0 for s in sources}, f"sqlite:///{course / 'gradebook.db'}",
+                   uid_of=own_uid)
