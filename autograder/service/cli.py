@@ -72,9 +72,10 @@ def build(args) -> Service:
     if not paths:
         raise ValueError("no source notebooks found")
     sources = [load_source(p) for p in paths]
-    try:
-        secret = read_secret(args.secret_file, "")
-    except OSError as exc:
+    journal = Path(args.course) / "service" / "journal.db"
+    try:     # a course the service already graded never gets a new secret silently
+        secret = read_secret(args.secret_file, str(journal) if journal.exists() else "")
+    except (OSError, ValueError) as exc:
         raise ValueError(f"cannot read the course secret: {exc}") from exc
     mode = _mode(args)
     if mode is None:
@@ -90,7 +91,7 @@ def build(args) -> Service:
           f"s)" for k, v in budgets.items()), file=sys.stderr)
     db_url = None if args.no_gradebook else (args.db_url or default_db_url(args.course))
     return Service(Path(args.course), inbound, Path(args.exchange),
-                   Journal(Path(args.course) / "service" / "journal.db"), policy, sources,
+                   Journal(journal), policy, sources,
                    opts, budgets, db_url)
 
 
