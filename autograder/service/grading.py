@@ -15,6 +15,7 @@ import json
 import shutil
 import sys
 import traceback
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -145,18 +146,21 @@ def _grade(svc: Service, row: Row, collected: Path) -> list[NotebookOutcome]:
 
 
 def _run(svc: Service, student: str, submitted: Path, sources: list[SourceNotebook]):
-    """The results and submissions of ``student``'s ``sources``, each notebook with its own
-    time budget (the public ``grade_batch``, one notebook per call)."""
-    results: list[CellResult] = []
-    subs: dict = {}
-    for src in sources:
+    """The results and submissions of ``student``'s ``sources``: each notebook graded by the
+    public ``grade_batch`` with its own time budget, ``opts.jobs`` notebooks at a time."""
+    def one(src):
         limits = svc.opts.limits
         if src.name in svc.budgets:
             limits = replace(limits, job_timeout=svc.budgets[src.name])
-        batch = grade_batch(submitted, [src], replace(svc.opts, limits=limits, progress=False),
-                            students=[student])
-        results.extend(batch.results)
-        subs.update(batch.submissions)
+        return grade_batch(submitted, [src], replace(svc.opts, limits=limits, jobs=1,
+                                                     progress=False), students=[student])
+
+    results: list[CellResult] = []
+    subs: dict = {}
+    with ThreadPoolExecutor(max_workers=max(1, svc.opts.jobs)) as pool:
+        for batch in pool.map(one, sources):     # in the sources' order
+            results.extend(batch.results)
+            subs.update(batch.submissions)
     return results, subs
 
 
