@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ..grade.batch import Options, grade_batch
-from ..model import Batch, CellKind, CellResult, SourceNotebook
+from ..model import ASSIGNMENT, Batch, CellKind, CellResult, SourceNotebook, Status
 from ..outputs import gradebook
 from . import handout, inbox, pages
 from .journal import Journal, NotebookOutcome, Row
@@ -80,6 +80,7 @@ def process(svc: Service, row: Row) -> str:
         graded = [o.notebook for o in outcomes if o.graded]
         return f"{row.student}: graded {', '.join(graded) or 'nothing new'}"
     except inbox.Changed as why:
+        svc.journal.retime(row, why.ctime_ns)
         svc.journal.postpone(row, str(why), inbox.SETTLE_SECONDS)
         return f"{row.student}: still being written; later"
     except OSError as exc:
@@ -116,8 +117,10 @@ def _grade(svc: Service, row: Row, collected: Path) -> list[NotebookOutcome]:
             continue
         d = digest(path)
         used = svc.journal.graded_since(row.student, src.name, since)
+        line = attempts_line(max(0, svc.policy.attempts - used), svc.policy.attempts)
         if d == svc.journal.last_digest(row.student, src.name):
             outcomes.append(NotebookOutcome(src.name, d, graded=False))
+            _hand_again(svc, collected, row.student, src.name, line)
         elif used >= svc.policy.attempts:
             outcomes.append(NotebookOutcome(src.name, d, graded=False))
             html = pages.not_graded_page(row.student, src.name, attempts_line(
@@ -131,6 +134,9 @@ def _grade(svc: Service, row: Row, collected: Path) -> list[NotebookOutcome]:
     for src, d in to_grade:
         rows = [r for r in results if r.notebook == src.name]
         auto = [r for r in rows if r.kind is not CellKind.MANUAL]
+        if auto and all(r.status is Status.GRADER_ERROR for r in auto):
+            # the grader's failure, never the student's: no attempt is charged; retried
+            raise RuntimeError(f"the grader failed on every test of {src.name}")
         score = sum(r.score or 0.0 for r in auto)
         outcomes.append(NotebookOutcome(src.name, d, True, score, sum(r.max_score for r in auto),
                                         tuple((r.name, r.score, r.max_score, r.status.value)
@@ -143,6 +149,15 @@ def _grade(svc: Service, row: Row, collected: Path) -> list[NotebookOutcome]:
             counting.append(src.name)
     _record(svc, row.student, collected, counting, results, subs)
     return outcomes
+
+
+def _hand_again(svc: Service, collected: Path, student: str, notebook: str, line: str) -> None:
+    """An unchanged notebook: its last graded page again (this submission has its own secret,
+    so its own copy), with today's attempts line."""
+    last = Path(svc.course) / "feedback" / student / ASSIGNMENT / f"{notebook}.html"
+    if last.is_file():
+        html = pages.with_line(last.read_text(encoding="utf-8"), line)
+        handout.hand_out(svc.course, svc.exchange, collected, student, notebook, html)
 
 
 def _run(svc: Service, student: str, submitted: Path, sources: list[SourceNotebook]):

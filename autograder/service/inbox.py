@@ -8,6 +8,7 @@ checked and their time taken, :func:`collect` copies one into a folder of the se
 
 from __future__ import annotations
 
+import functools
 import importlib
 import importlib.util
 import os
@@ -25,9 +26,11 @@ from ..model import ASSIGNMENT
 SETTLE_SECONDS = 1.0
 
 
+@functools.lru_cache(maxsize=1)
 def exchange_rules():
     """``deploy/private_exchange.py``: installed as ``private_exchange`` in the instructors'
-    environment on the hub, else loaded from this repository."""
+    environment on the hub, else loaded from this repository (once: its exception classes must
+    be the same objects wherever they are caught)."""
     try:
         return importlib.import_module("private_exchange")
     except ModuleNotFoundError:
@@ -87,7 +90,12 @@ def _examine(rules, path: Path, student: str, uid_of) -> Found:
 
 
 class Changed(Exception):
-    """The submission changed since it was noticed (still being written): try again later."""
+    """The submission changed since it was noticed (still being written): try again later,
+    taking its new time (``ctime_ns``)."""
+
+    def __init__(self, message: str, ctime_ns: int):
+        super().__init__(message)
+        self.ctime_ns = ctime_ns
 
 
 def collect(inbound: Path, folder: str, student: str, ctime_ns: int, dest: Path,
@@ -111,8 +119,9 @@ def collect(inbound: Path, folder: str, student: str, ctime_ns: int, dest: Path,
 
     rules.copy_submission(src, str(target), uid, skipped, max_file_bytes=1000 *
                           course.max_file_size, max_total_bytes=1000 * course.max_dir_size)
-    if rules.newest_ctime_ns(src, uid) != ctime_ns:
-        raise Changed(f"{folder} changed since it was noticed")
+    now_ns = rules.newest_ctime_ns(src, uid)
+    if now_ns != ctime_ns:
+        raise Changed(f"{folder} changed since it was noticed", now_ns)
     stamp = rules.utc_stamp(ctime_ns, "%Y-%m-%d %H:%M:%S.%f %Z")
     (target / rules.TIMESTAMP_FILE).write_text(stamp, encoding="utf-8")
     return target

@@ -125,6 +125,10 @@ class Journal:
         self.db.execute("UPDATE submissions SET state='queued', retry_at=?, error=? WHERE id=?",
                         (time.time() + delay, why, row.id))
 
+    def retime(self, row: Row, ctime_ns: int) -> None:
+        """The submission changed after it was noticed: its time is the newer one."""
+        self.db.execute("UPDATE submissions SET ctime_ns=? WHERE id=?", (int(ctime_ns), row.id))
+
     def fail(self, row: Row, why: str) -> None:
         self.db.execute("UPDATE submissions SET state='failed', error=?, finished=? "
                         "WHERE id=?", (why, time.time(), row.id))

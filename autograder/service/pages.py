@@ -16,12 +16,14 @@ with the attempts line on top.
 from __future__ import annotations
 
 import datetime as dt
+import re
 
 from ..model import CellKind, CellResult
 from ..outputs import feedback
 from ..outputs.html import e, page
 
 RECORDED = "recorded; revealed after the due date"
+_LINE = re.compile(r"<p class='attempts'><b>[^<]*</b></p>")
 
 
 def open_page(student: str, notebook: str, rows: list[CellResult], line: str) -> str:
@@ -69,3 +71,8 @@ def not_graded_page(student: str, notebook: str, line: str, reopens: dt.datetime
             "Your earlier graded attempts keep their feedback and their place in the "
             "course's policy (which attempt counts).</p>"]
     return page(f"{notebook}: feedback for {student}", body, feedback._STYLE)
+
+
+def with_line(html: str, line: str) -> str:
+    """A page with its attempts line replaced by ``line``."""
+    return _LINE.sub(lambda _m: f"<p class='attempts'><b>{e(line)}</b></p>", html, count=1)

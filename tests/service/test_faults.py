@@ -160,3 +160,46 @@ def test_grade_keeps_what_it_graded_when_stopped(tmp_path, q1, mode):
         if r["grade_id"] in {t for _, t, _ in q1.graded}:
             name = next(n for n, t, _ in q1.graded if t == r["grade_id"])
             assert float(r["score"]) == pytest.approx(points[name]), r
+
+
+def test_a_grader_failure_charges_no_attempt(service, q1, monkeypatch):
+    import dataclasses
+
+    from autograder.model import Status
+    from autograder.service import grading
+
+    svc = service()
+    submit(svc, "ge123", {q1.name: honest(q1, "ge123")})
+    real = grading.grade_batch
+
+    def failing(*args, **kwargs):
+        batch = real(*args, **kwargs)
+        batch.results[:] = [dataclasses.replace(r, status=Status.GRADER_ERROR, score=0.0)
+                            for r in batch.results]
+        return batch
+    monkeypatch.setattr(grading, "grade_batch", failing)
+    loop.notice(svc, now=later())
+    assert loop.drain(svc) == ["ge123: grader error; retried later"]
+    assert svc.journal.graded_since("ge123", q1.name, 0) == 0
+    monkeypatch.setattr(grading, "grade_batch", real)
+    loop.drain(svc, now=later())
+    assert svc.journal.graded_since("ge123", q1.name, 0) == 1
+
+
+def test_a_submission_changing_after_it_was_noticed_is_retimed(service, q1):
+    svc = service()
+    folder = submit(svc, "ch123", {q1.name: honest(q1, "ch123")})
+    loop.notice(svc, now=later())
+    noticed = svc.journal.row_of(folder).ctime_ns
+    path = svc.inbound / folder / f"{q1.name}.ipynb"
+    for _ in range(500):          # still being written, until the kernel's clock ticks past
+        with open(path, "a") as fh:        # the noticed time (ctime has a tick's resolution)
+            fh.write(" ")
+        if os.lstat(path).st_ctime_ns != noticed:
+            break
+        time.sleep(0.01)
+    assert loop.drain(svc) == ["ch123: still being written; later"]
+    newer = svc.journal.row_of(folder).ctime_ns
+    assert newer == os.lstat(path).st_ctime_ns > noticed
+    loop.drain(svc, now=later())
+    assert svc.journal.states()["done"] == 1

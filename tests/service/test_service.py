@@ -79,6 +79,9 @@ def test_an_unchanged_notebook_costs_no_attempt(service, sources, q1):
     assert svc.journal.graded_since("un123", q1.name, 0) == 1
     assert svc.journal.graded_since("un123", other.name, 0) == 2
     assert attempts_line(0, 2) in exchange_page(svc, folder, other.name)
+    # the unchanged notebook's last graded page comes with this submission too, line updated
+    again = exchange_page(svc, folder, q1.name)
+    assert attempts_line(1, 2) in again and "Hidden cases" in again
 
 
 def test_budgets_come_from_the_reference_cost(q1, mode):
