@@ -61,6 +61,23 @@ def _mode(args) -> Mode | None:
     return Mode.UNSAFE
 
 
+def hold_lock(course: Path):
+    """The course's service lock (an open file holding ``flock``): two services grading the
+    same journal would grade a submission twice. ``ValueError`` when another one holds it."""
+    import fcntl
+
+    path = Path(course) / "service" / "watch.lock"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fh = open(path, "w")
+    try:
+        fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError as exc:
+        fh.close()
+        raise ValueError(f"another `watch` is already serving {course} ({path} is locked)"
+                         ) from exc
+    return fh
+
+
 def build(args) -> Service:
     """The service the arguments describe; ``ValueError`` when they cannot work."""
     inbound = Path(args.exchange) / COURSE_ID / "inbound"
@@ -98,6 +115,7 @@ def build(args) -> Service:
 def main(args: argparse.Namespace) -> int:
     """Serve; the exit status."""
     try:
+        lock = hold_lock(args.course)
         svc = build(args)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -108,4 +126,5 @@ def main(args: argparse.Namespace) -> int:
         print("stopped; queued submissions wait in the journal", file=sys.stderr)
     finally:
         svc.journal.close()
+        lock.close()
     return 0

@@ -203,3 +203,29 @@ def test_a_submission_changing_after_it_was_noticed_is_retimed(service, q1):
     assert newer == os.lstat(path).st_ctime_ns > noticed
     loop.drain(svc, now=later())
     assert svc.journal.states()["done"] == 1
+
+
+def test_a_gradebook_down_mid_run_is_caught_up(service, q1, monkeypatch):
+    from nbgrader.api import Gradebook
+
+    from autograder.model import ASSIGNMENT
+    from autograder.outputs import gradebook
+
+    svc = service()
+    submit(svc, "db123", {q1.name: honest(q1, "db123")})
+    real = gradebook.sync
+
+    def down(*args, **kwargs):
+        raise ConnectionError("could not connect to server: Connection refused")
+    monkeypatch.setattr(gradebook, "sync", down)
+    loop.notice(svc, now=later())
+    assert loop.drain(svc) == ["db123: grader error; retried later"]
+    assert svc.journal.graded_since("db123", q1.name, 0) == 0     # nothing counted yet
+    monkeypatch.setattr(gradebook, "sync", real)                  # the server is back
+    loop.drain(svc, now=later())
+    assert svc.journal.graded_since("db123", q1.name, 0) == 1
+    with Gradebook(svc.db_url, course_id="4f9") as gb:
+        nb = gb.find_submission_notebook(q1.name, ASSIGNMENT, "db123")
+        auto = {g.name: g.auto_score for g in nb.grades}
+    for name, test_id, points in q1.graded:
+        assert auto[test_id] == pytest.approx(points), name

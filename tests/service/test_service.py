@@ -130,3 +130,13 @@ def test_watch_refuses_a_bad_policy(tmp_path, capsys):
     status = main(["watch", "--exchange", str(tmp_path / "exchange"), "--course",
                    str(tmp_path), "--once"])
     assert status == 2 and "attempts" in capsys.readouterr().err
+
+
+def test_a_second_watch_on_the_same_course_is_refused(tmp_path):
+    from autograder.service.cli import hold_lock
+
+    first = hold_lock(tmp_path)
+    with pytest.raises(ValueError, match="already serving"):
+        hold_lock(tmp_path)
+    first.close()
+    hold_lock(tmp_path).close()            # free again once the first has stopped
