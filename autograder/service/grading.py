@@ -15,12 +15,11 @@ import json
 import shutil
 import sys
 import traceback
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ..grade.batch import Options, grade_batch
-from ..model import ASSIGNMENT, Batch, CellKind, CellResult, SourceNotebook, Status
+from ..model import Batch, CellKind, CellResult, SourceNotebook, Status
 from ..outputs import gradebook
 from . import handout, inbox, pages
 from .journal import Journal, NotebookOutcome, Row
@@ -144,6 +143,7 @@ def _grade(svc: Service, row: Row, collected: Path) -> list[NotebookOutcome]:
         render = pages.open_page if svc.policy.is_open(dt.datetime.now(dt.timezone.utc)) \
             else pages.closed_page
         html = render(row.student, src.name, rows, lines[src.name])
+        handout.write_atomic(_last_page(svc, row.student, src.name), html, 0o600)
         handout.hand_out(svc.course, svc.exchange, collected, row.student, src.name, html)
         if _counts(svc, row, when, src.name, score):
             counting.append(src.name)
@@ -154,29 +154,34 @@ def _grade(svc: Service, row: Row, collected: Path) -> list[NotebookOutcome]:
 def _hand_again(svc: Service, collected: Path, student: str, notebook: str, line: str) -> None:
     """An unchanged notebook: its last graded page again (this submission has its own secret,
     so its own copy), with today's attempts line."""
-    last = Path(svc.course) / "feedback" / student / ASSIGNMENT / f"{notebook}.html"
+    last = _last_page(svc, student, notebook)
     if last.is_file():
         html = pages.with_line(last.read_text(encoding="utf-8"), line)
         handout.hand_out(svc.course, svc.exchange, collected, student, notebook, html)
 
 
-def _run(svc: Service, student: str, submitted: Path, sources: list[SourceNotebook]):
-    """The results and submissions of ``student``'s ``sources``: each notebook graded by the
-    public ``grade_batch`` with its own time budget, ``opts.jobs`` notebooks at a time."""
-    def one(src):
-        limits = svc.opts.limits
-        if src.name in svc.budgets:
-            limits = replace(limits, job_timeout=svc.budgets[src.name])
-        return grade_batch(submitted, [src], replace(svc.opts, limits=limits, jobs=1,
-                                                     progress=False), students=[student])
+def _last_page(svc: Service, student: str, notebook: str) -> Path:
+    """Where the page of ``student``'s last graded attempt of ``notebook`` is kept."""
+    return Path(svc.course) / "service" / "pages" / student / f"{notebook}.html"
 
-    results: list[CellResult] = []
-    subs: dict = {}
-    with ThreadPoolExecutor(max_workers=max(1, svc.opts.jobs)) as pool:
-        for batch in pool.map(one, sources):     # in the sources' order
-            results.extend(batch.results)
-            subs.update(batch.submissions)
-    return results, subs
+
+def _run(svc: Service, student: str, submitted: Path, sources: list[SourceNotebook]):
+    """The results and submissions of ``student``'s ``sources``, by the public ``grade_batch``
+    (its ``opts.jobs`` sandboxes at a time) under the largest of their budgets.
+
+    One call for the whole submission, not one per notebook in parallel threads: the batch
+    plans its jobs (``ast.parse``) in one thread, and CPython 3.11's parser is not safe to run
+    from several threads at once (``SystemError: AST constructor recursion depth mismatch``,
+    seen here under load)."""
+    if not sources:
+        return [], {}
+    limits = svc.opts.limits
+    own = [svc.budgets[s.name] for s in sources if s.name in svc.budgets]
+    if own:
+        limits = replace(limits, job_timeout=max(own))
+    batch = grade_batch(submitted, sources, replace(svc.opts, limits=limits, progress=False),
+                        students=[student])
+    return batch.results, batch.submissions
 
 
 def _counts(svc: Service, row: Row, when: dt.datetime, notebook: str, score: float) -> bool:
