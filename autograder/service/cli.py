@@ -14,6 +14,7 @@ Exit status 2 for a usage error (no inbound, a bad policy, no sandbox, an unread
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -39,7 +40,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add("--db-url", default=None, help="the gradebook (default sqlite:///COURSE/gradebook.db)")
     add("--no-gradebook", action="store_true", help="feedback only; the gradebook untouched")
     add("--poll", type=float, default=2.0, help="seconds between looks at the inbound")
-    add("--jobs", type=int, default=1, help="sandboxes per notebook's grading (default 1)")
+    add("--jobs", type=int, default=max(1, min(8, os.cpu_count() or 1)),
+        help="sandboxes run in parallel for a submission's notebooks (default: the CPUs, at most 8)")
     add("--timeout", type=float, default=10.0, help="time limit per case, in seconds")
     add("--memory-mb", type=int, default=2048, help="memory limit of each sandbox, in MB")
     add("--secret-file", type=Path, default=None, help="the course secret (as for grade)")
