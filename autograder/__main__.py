@@ -6,6 +6,7 @@ Each command lives in its own module with a ``add_arguments(parser)`` and a ``ma
 - ``grade``    sandboxed batch grading, CSV, feedback, report, gradebook (autograder/grade/)
 - ``feedback`` the hand-back through nbgrader's exchange (autograder/cli_feedback.py)
 - ``export``   Canvas, Moodle and long-format grades (autograder/cli_export.py)
+- ``watch``    grade each submission as it arrives, feedback at once (autograder/service/)
 - ``lab``      JupyterLab on the student or the instructor view (autograder/lab.py)
 """
 
@@ -22,6 +23,8 @@ COMMANDS = {
     "feedback": ("autograder.cli_feedback", "hand back marks, comments and test results "
                  "through nbgrader's exchange"),
     "export": ("autograder.cli_export", "final grades for Canvas, Moodle and the archive"),
+    "watch": ("autograder.service.cli", "grade each submission as it arrives and hand its "
+              "feedback back at once (the grading service)"),
     "lab": ("autograder.lab", "open JupyterLab on the course (student or instructor view)"),
 }
 

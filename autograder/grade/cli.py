@@ -35,7 +35,8 @@ from ..course import default_db_url
 from ..outputs.gradebook_url import MissingDriver, resolve_db_url
 from ..outputs.similarity import reference_source
 from . import remedy
-from .batch import Options, grade_batch
+from ..service.incremental import grade_in_chunks, write_csv_atomic
+from .batch import Options
 from .executors import ClusterUnavailable
 from .reading import MAX_NOTEBOOK_MB
 from .secret import read_secret
@@ -189,7 +190,9 @@ def main(args: argparse.Namespace) -> int:
     args.graded_as_map = graded_as
     t0 = time.monotonic()
     try:
-        batch = grade_batch(args.submitted, sources, _options(args, secret, mode))
+        # grades.csv after every chunk of students: a batch stopped early keeps what it graded
+        batch = grade_in_chunks(args.submitted, sources, _options(args, secret, mode),
+                                on_chunk=lambda b: write_csv_atomic(b, args.out / "grades.csv"))
     except ClusterUnavailable as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -1,0 +1,194 @@
+"""The service's durable journal: one row per submission, its state, and every attempt.
+
+SQLite in write-ahead-log mode in the course folder (``<course>/service/journal.db``). Each
+submission folder of the exchange's inbound gets one row (its name is unique: noticing it again
+changes nothing) that moves ``queued -> grading -> done`` (or ``failed``, for a submission
+refused by the collect rules). A service killed while a row is ``grading`` finds it so on
+restart and puts it back in the queue (:meth:`Journal.recover`): nothing is lost. The attempts a
+grading consumed are written in the same transaction that marks the row ``done``, keyed by
+(submission, notebook): an attempt is counted once, whatever was interrupted before.
+
+Tables (documented for the class report, which reads ``attempts``):
+
+- ``submissions(id, folder, student, ctime_ns, noticed, state, tries, retry_at, error,
+  finished)``;
+- ``notebooks(submission_id, student, notebook, time, digest, graded, score, max_score)``: one
+  row per notebook a submission held; ``graded`` 0 when it was unchanged or over the budget;
+- ``attempts(submission_id, student, notebook, item, time, score, max_score, status)``: one
+  row per graded item of a graded notebook (``time``: the submission's, seconds since the
+  epoch, as the exchange's kernel recorded it).
+"""
+
+from __future__ import annotations
+
+import sqlite3
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS submissions (
+    id INTEGER PRIMARY KEY, folder TEXT UNIQUE NOT NULL, student TEXT NOT NULL,
+    ctime_ns INTEGER NOT NULL, noticed REAL NOT NULL, state TEXT NOT NULL DEFAULT 'queued',
+    tries INTEGER NOT NULL DEFAULT 0, retry_at REAL NOT NULL DEFAULT 0, error TEXT DEFAULT '',
+    finished REAL NOT NULL DEFAULT 0);
+CREATE TABLE IF NOT EXISTS notebooks (
+    submission_id INTEGER NOT NULL, student TEXT NOT NULL, notebook TEXT NOT NULL,
+    time REAL NOT NULL, digest TEXT NOT NULL, graded INTEGER NOT NULL,
+    score REAL, max_score REAL, PRIMARY KEY (submission_id, notebook));
+CREATE TABLE IF NOT EXISTS attempts (
+    submission_id INTEGER NOT NULL, student TEXT NOT NULL, notebook TEXT NOT NULL,
+    item TEXT NOT NULL, time REAL NOT NULL, score REAL, max_score REAL, status TEXT,
+    PRIMARY KEY (submission_id, notebook, item));
+CREATE INDEX IF NOT EXISTS sub_state ON submissions (state, student);
+"""
+STATES = ("queued", "grading", "done", "failed")
+
+
+@dataclass(frozen=True)
+class Row:
+    """A submission as the journal holds it."""
+
+    id: int
+    folder: str
+    student: str
+    ctime_ns: int
+    state: str
+    tries: int
+
+
+@dataclass(frozen=True)
+class NotebookOutcome:
+    """What one notebook of a graded submission gave (written by :meth:`Journal.finish`)."""
+
+    notebook: str
+    digest: str
+    graded: bool
+    score: float | None = None
+    max_score: float | None = None
+    items: tuple = ()          #: (item, score, max_score, status) of a graded notebook
+
+
+class Journal:
+    """The journal at ``path`` (created with its folder on first use)."""
+
+    def __init__(self, path: Path):
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.db = sqlite3.connect(str(self.path), timeout=30, isolation_level=None)
+        self.db.execute("PRAGMA journal_mode=WAL")
+        self.db.execute("PRAGMA synchronous=FULL")
+        self.db.executescript(SCHEMA)
+
+    def close(self) -> None:
+        self.db.close()
+
+    def notice(self, folder: str, student: str, ctime_ns: int) -> bool:
+        """Queue the inbound ``folder`` unless known; whether it was new."""
+        cur = self.db.execute(
+            "INSERT OR IGNORE INTO submissions (folder, student, ctime_ns, noticed) "
+            "VALUES (?, ?, ?, ?)", (folder, student, int(ctime_ns), time.time()))
+        return cur.rowcount == 1
+
+    def row_of(self, folder: str) -> Row | None:
+        """The journal's row of the inbound ``folder``."""
+        found = self.db.execute("SELECT id, folder, student, ctime_ns, state, tries FROM "
+                                "submissions WHERE folder=?", (folder,)).fetchone()
+        return Row(*found) if found else None
+
+    def recover(self) -> int:
+        """Put back in the queue what a killed service left ``grading``; how many."""
+        return self.db.execute("UPDATE submissions SET state='queued' WHERE state='grading'"
+                               ).rowcount
+
+    def next_ready(self, now: float | None = None) -> Row | None:
+        """The next submission to grade: round-robin over students (the one served longest
+        ago, or never, first), each student's own submissions in the order the exchange saw
+        them. A student's later submissions wait behind their own, never the class's."""
+        now = time.time() if now is None else now
+        cur = self.db.execute(
+            "SELECT s.id, s.folder, s.student, s.ctime_ns, s.state, s.tries FROM submissions s "
+            "LEFT JOIN (SELECT student, MAX(finished) AS last FROM submissions "
+            "           GROUP BY student) d "
+            "ON d.student = s.student "
+            "WHERE s.state='queued' AND s.retry_at <= ? "
+            "ORDER BY COALESCE(d.last, 0), s.ctime_ns, s.id LIMIT 1", (now,))
+        found = cur.fetchone()
+        return Row(*found) if found else None
+
+    def start(self, row: Row) -> None:
+        self.db.execute("UPDATE submissions SET state='grading', tries=tries+1 WHERE id=?",
+                        (row.id,))
+
+    def postpone(self, row: Row, why: str, delay: float) -> None:
+        """Back to the queue, not before ``delay`` seconds (e.g. a full disk)."""
+        self.db.execute("UPDATE submissions SET state='queued', retry_at=?, error=? WHERE id=?",
+                        (time.time() + delay, why, row.id))
+
+    def retime(self, row: Row, ctime_ns: int) -> None:
+        """The submission changed after it was noticed: its time is the newer one."""
+        self.db.execute("UPDATE submissions SET ctime_ns=? WHERE id=?", (int(ctime_ns), row.id))
+
+    def fail(self, row: Row, why: str) -> None:
+        self.db.execute("UPDATE submissions SET state='failed', error=?, finished=? "
+                        "WHERE id=?", (why, time.time(), row.id))
+
+    def finish(self, row: Row, outcomes: list[NotebookOutcome]) -> None:
+        """Mark ``row`` done and record its notebooks and items, in one transaction."""
+        when = row.ctime_ns / 1e9
+        with self._transaction():
+            for o in outcomes:
+                self.db.execute(
+                    "INSERT OR REPLACE INTO notebooks VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+                    (row.id, row.student, o.notebook, when, o.digest, int(o.graded),
+                     o.score, o.max_score))
+                for item, score, max_score, status in o.items:
+                    self.db.execute(
+                        "INSERT OR REPLACE INTO attempts VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+                        (row.id, row.student, o.notebook, item, when, score, max_score, status))
+            self.db.execute("UPDATE submissions SET state='done', error='', finished=? "
+                            "WHERE id=?", (time.time(), row.id))
+
+    def _transaction(self):
+        db = self.db
+
+        class _Tx:
+            def __enter__(self):
+                db.execute("BEGIN IMMEDIATE")
+
+            def __exit__(self, kind, exc, tb):
+                db.execute("ROLLBACK" if kind else "COMMIT")
+                return False
+        return _Tx()
+
+    def graded_since(self, student: str, notebook: str, since: float) -> int:
+        """Graded attempts of ``notebook`` by ``student`` at or after ``since`` (epoch s)."""
+        return self.db.execute(
+            "SELECT COUNT(*) FROM notebooks WHERE student=? AND notebook=? AND graded=1 "
+            "AND time >= ?", (student, notebook, since)).fetchone()[0]
+
+    def last_digest(self, student: str, notebook: str) -> str | None:
+        """The digest of ``student``'s last graded version of ``notebook``."""
+        found = self.db.execute(
+            "SELECT digest FROM notebooks WHERE student=? AND notebook=? AND graded=1 "
+            "ORDER BY time DESC, submission_id DESC LIMIT 1", (student, notebook)).fetchone()
+        return found[0] if found else None
+
+    def best_score(self, student: str, notebook: str, before: int) -> float | None:
+        """The best automatic score of ``notebook`` over ``student``'s graded attempts in
+        submissions other than ``before`` (None when none)."""
+        found = self.db.execute(
+            "SELECT MAX(score) FROM notebooks WHERE student=? AND notebook=? AND graded=1 "
+            "AND submission_id != ?", (student, notebook, before)).fetchone()
+        return found[0]
+
+    def states(self) -> dict[str, int]:
+        """How many submissions are in each state."""
+        got = dict(self.db.execute("SELECT state, COUNT(*) FROM submissions GROUP BY state"))
+        return {s: got.get(s, 0) for s in STATES}
+
+    def attempts_rows(self) -> list[tuple]:
+        """Every recorded item attempt (student, notebook, item, time, score, max_score)."""
+        return list(self.db.execute(
+            "SELECT student, notebook, item, time, score, max_score FROM attempts "
+            "ORDER BY time, submission_id, notebook, item"))

@@ -1,0 +1,85 @@
+"""The journal: nothing lost, nothing counted twice, students served in turn."""
+
+from __future__ import annotations
+
+import sqlite3
+
+import pytest
+
+from autograder.service.journal import Journal, NotebookOutcome
+
+
+def _outcome(nb="q1_imaging", items=(("q1_item1", 1.0, 1.0, "ok"),)):
+    return NotebookOutcome(nb, "d1", True, 1.0, 1.0, items)
+
+
+def test_noticing_twice_queues_once(tmp_path):
+    j = Journal(tmp_path / "j.db")
+    assert j.notice("ana+tripos2006+t+1", "ana", 10)
+    assert not j.notice("ana+tripos2006+t+1", "ana", 10)
+    assert j.states()["queued"] == 1
+
+
+def test_wal_mode(tmp_path):
+    Journal(tmp_path / "j.db")
+    assert sqlite3.connect(tmp_path / "j.db").execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+
+
+def _serve(j, n):
+    order = []
+    for _ in range(n):
+        row = j.next_ready()
+        j.start(row)
+        j.finish(row, [])
+        order.append(row.folder)
+    return order
+
+
+def test_round_robin_a_student_waits_behind_their_own(tmp_path):
+    j = Journal(tmp_path / "j.db")
+    for i in range(3):                       # ana submits three times before bo submits once
+        j.notice(f"ana+{i}", "ana", 100 + i)
+    j.notice("bo+0", "bo", 200)
+    j.notice("cy+0", "cy", 300)
+    assert _serve(j, 5) == ["ana+0", "bo+0", "cy+0", "ana+1", "ana+2"]
+    assert j.next_ready() is None
+
+
+def test_a_killed_grading_is_resumed_and_counted_once(tmp_path):
+    j = Journal(tmp_path / "j.db")
+    j.notice("ana+0", "ana", 5 * 10**9)
+    row = j.next_ready()
+    j.start(row)
+    j.close()                                # killed while grading
+    j = Journal(tmp_path / "j.db")           # restarted
+    assert j.next_ready() is None            # still "grading" until recovered
+    assert j.recover() == 1
+    row = j.next_ready()
+    j.start(row)
+    j.finish(row, [_outcome()])
+    j.finish(row, [_outcome()])              # finishing again (a repeated run) adds nothing
+    assert j.graded_since("ana", "q1_imaging", 0) == 1
+    assert len(j.attempts_rows()) == 1
+    assert j.states()["done"] == 1 and row.tries == 1
+
+
+def test_finish_is_all_or_nothing(tmp_path):
+    j = Journal(tmp_path / "j.db")
+    j.notice("ana+0", "ana", 1)
+    row = j.next_ready()
+    j.start(row)
+    bad = NotebookOutcome("q1_imaging", "d", True, 1.0, 1.0, (("x", 1.0),))  # malformed item
+    with pytest.raises(ValueError):
+        j.finish(row, [_outcome("q2_nuclear"), bad])
+    assert j.attempts_rows() == [] and j.states()["grading"] == 1
+
+
+def test_postponed_until_its_time(tmp_path):
+    j = Journal(tmp_path / "j.db")
+    j.notice("ana+0", "ana", 1)
+    row = j.next_ready()
+    j.start(row)
+    j.postpone(row, "disk full", 60)
+    assert j.next_ready() is None
+    import time
+    assert j.next_ready(time.time() + 61).folder == "ana+0"

@@ -1,0 +1,142 @@
+"""The service end to end: gradebook as the policy says, pages where Fetch Feedback looks,
+unchanged notebooks free, the time budget, and ``python -m autograder watch``."""
+
+from __future__ import annotations
+
+import os
+import warnings
+
+import pytest
+from gradingtools import function_names
+from servicetools import exchange_page, honest, later, submit, with_cell
+
+from autograder.model import ASSIGNMENT
+from autograder.service import budget, loop
+from autograder.service.policy import Policy, attempts_line
+
+
+def _auto_scores(svc, student, notebook):
+    from nbgrader.api import Gradebook
+
+    with warnings.catch_warnings(), Gradebook(svc.db_url, course_id="4f9") as gb:
+        warnings.simplefilter("ignore")
+        nb = gb.find_submission_notebook(notebook, ASSIGNMENT, student)
+        return {g.name: g.auto_score for g in nb.grades}
+
+
+def _broken(src, student):
+    """``src``'s model answer with its first graded function returning None."""
+    name = function_names(src)[0]
+    return name, with_cell(honest(src, student), name, f"def {name}(*a, **k):\n    return None\n")
+
+
+@pytest.mark.parametrize("counts", ["last", "best"])
+def test_the_gradebook_keeps_what_the_policy_counts(service, q1, counts):
+    svc = service(counts=counts)
+    name, broken = _broken(q1, "gb123")
+    test_id = next(t for n, t, _ in q1.graded if n == name)
+    points = next(p for n, _, p in q1.graded if n == name)
+    submit(svc, "gb123", {q1.name: honest(q1, "gb123")})
+    loop.notice(svc, now=later())
+    loop.drain(svc)
+    assert _auto_scores(svc, "gb123", q1.name)[test_id] == pytest.approx(points)
+    submit(svc, "gb123", {q1.name: broken})       # a worse attempt afterwards
+    loop.notice(svc, now=later())
+    loop.drain(svc)
+    expected = points if counts == "best" else 0.0
+    assert _auto_scores(svc, "gb123", q1.name)[test_id] == pytest.approx(expected)
+    assert (svc.course / "submitted" / "gb123" / ASSIGNMENT / "timestamp.txt").is_file()
+
+
+def test_pages_land_where_fetch_feedback_looks(service, q1):
+    svc = service()
+    folder = submit(svc, "pg123", {q1.name: honest(q1, "pg123")})
+    loop.notice(svc, now=later())
+    loop.drain(svc)
+    local = svc.course / "feedback" / "pg123" / ASSIGNMENT
+    assert {p.name for p in local.iterdir()} >= {f"{q1.name}.html", "timestamp.txt",
+                                                 "submission_secret.txt"}
+    assert exchange_page(svc, folder, q1.name) == (local / f"{q1.name}.html").read_text()
+    # the time on record is the kernel's (the folder's ctime), not the student's timestamp.txt
+    stamp = (local / "timestamp.txt").read_text()
+    ctime = os.lstat(svc.inbound / folder).st_ctime
+    import datetime as dt
+    on_record = dt.datetime.strptime(stamp, "%Y-%m-%d %H:%M:%S.%f %Z")
+    assert abs(on_record.replace(tzinfo=dt.timezone.utc).timestamp() - ctime) < 1.0
+
+
+def test_an_unchanged_notebook_costs_no_attempt(service, sources, q1):
+    svc = service(attempts=2)
+    other = next(s for s in sources if s.name != q1.name)
+    first = {q1.name: honest(q1, "un123"), other.name: honest(other, "un123")}
+    submit(svc, "un123", first)
+    loop.notice(svc, now=later())
+    loop.drain(svc)
+    _name, broken = _broken(other, "un123")
+    folder = submit(svc, "un123", {q1.name: first[q1.name], other.name: broken})
+    loop.notice(svc, now=later())
+    loop.drain(svc)
+    assert svc.journal.graded_since("un123", q1.name, 0) == 1
+    assert svc.journal.graded_since("un123", other.name, 0) == 2
+    assert attempts_line(0, 2) in exchange_page(svc, folder, other.name)
+    # the unchanged notebook's last graded page comes with this submission too, line updated
+    again = exchange_page(svc, folder, q1.name)
+    assert attempts_line(1, 2) in again and "Hidden cases" in again
+
+
+def test_budgets_come_from_the_reference_cost(q1, mode):
+    from gradingtools import SECRET
+
+    from autograder.grade.batch import Options
+
+    costs = budget.measure([q1], Options(out=None, secret=SECRET, mode=mode, progress=False))
+    assert 0 < costs[q1.name] < 120
+    got = budget.budgets({"a": 0.5, "b": 7.0}, Policy(margin=10, floor_seconds=20))
+    assert got == {"a": 20.0, "b": 70.0}
+
+
+def test_watch_once_from_the_command_line(tmp_path, q1, mode, capsys, monkeypatch):
+    from autograder.__main__ import main
+    from autograder.service import inbox
+
+    monkeypatch.setattr(inbox, "SETTLE_SECONDS", 0.0)   # no waiting for the folder to settle
+
+    course, exchange = tmp_path / "course", tmp_path / "exchange"
+    (exchange / "4f9" / "inbound").mkdir(parents=True)
+    course.mkdir()
+    (course / "grading_service.json").write_text('{"attempts": 3}')
+
+    from types import SimpleNamespace     # what servicetools.submit and exchange_page need
+    Svc = SimpleNamespace(inbound=exchange / "4f9" / "inbound", exchange=exchange)
+    folder = submit(Svc, "root", {q1.name: honest(q1, "root")})   # the tests run as root
+    (tmp_path / "secret").write_text("watch-test-secret\n")
+    status = main(["watch", "--exchange", str(exchange), "--course", str(course),
+                   "--no-gradebook", "--reference-seconds", "2", "--once", "--poll", "0",
+                   "--secret-file", str(tmp_path / "secret"), "--source", str(q1.path.parent)])
+    err = capsys.readouterr().err
+    assert status == 0, err
+    assert "time budget per notebook" in err and "q1_imaging 20 s" in err
+    assert "root: graded q1_imaging" in err
+    assert exchange_page(Svc, folder, q1.name).count(attempts_line(2, 3)) == 1
+    assert attempts_line(2, 3) in (course / "feedback" / "root" / ASSIGNMENT /
+                                   f"{q1.name}.html").read_text()
+
+
+def test_watch_refuses_a_bad_policy(tmp_path, capsys):
+    from autograder.__main__ import main
+
+    (tmp_path / "exchange" / "4f9" / "inbound").mkdir(parents=True)
+    (tmp_path / "grading_service.json").write_text('{"attempts": -1}')
+    status = main(["watch", "--exchange", str(tmp_path / "exchange"), "--course",
+                   str(tmp_path), "--once"])
+    assert status == 2 and "attempts" in capsys.readouterr().err
+
+
+def test_a_second_watch_on_the_same_course_is_refused(tmp_path):
+    from autograder.service.cli import hold_lock
+
+    first = hold_lock(tmp_path)
+    with pytest.raises(ValueError, match="already serving"):
+        hold_lock(tmp_path)
+    first.close()
+    hold_lock(tmp_path).close()            # free again once the first has stopped
