@@ -57,7 +57,7 @@ def _service(work: Path, sources, mode, gradebook: bool):
 
 def _submit(svc, student: str, sources) -> float:
     """One student's submission written into the inbound; when (perf_counter)."""
-    from autograder.model import ASSIGNMENT
+    from autograder.course import ASSIGNMENT
 
     stamp = time.strftime("%Y-%m-%d %H:%M:%S.000000 UTC", time.gmtime())
     folder = svc.inbound / f"{student}+{ASSIGNMENT}+{stamp}+{secrets.token_hex(9)}"
@@ -92,7 +92,7 @@ def _p(samples: list[float], q: float) -> float:
 def _batch_seconds(work: Path, sources, mode, students: list[str]) -> float:
     from autograder.grade.batch import Options, grade_batch
     from autograder.isolation import Limits
-    from autograder.model import ASSIGNMENT
+    from autograder.course import ASSIGNMENT
 
     submitted = work / "batch" / "submitted"
     for s in students:

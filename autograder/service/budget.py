@@ -18,7 +18,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..grade.batch import Options, grade_batch
-from ..model import ASSIGNMENT, SourceNotebook
+from ..course import ASSIGNMENT
+from ..model import SourceNotebook
 from .policy import Policy
 
 #: the folder name the reference is graded under (never a student's: ids have no dash first)

@@ -16,7 +16,7 @@ import shutil
 from pathlib import Path
 
 from ..course import COURSE_ID
-from ..model import ASSIGNMENT
+from ..course import ASSIGNMENT
 from ..outputs.gradebook import CARRIED_FILES
 
 SECRET_FILE = "submission_secret.txt"

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..course import REPO_ROOT
-from ..model import ASSIGNMENT
+from ..course import ASSIGNMENT
 
 #: a submission whose newest change is younger than this is left for the next poll: nbgrader's
 #: submit may still be writing it (the collect would refuse it as changing)

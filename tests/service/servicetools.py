@@ -16,7 +16,7 @@ from gradingtools import CASE_TIMEOUT, SECRET, model_version, set_cell, typed_ve
 from autograder.course import COURSE_ID
 from autograder.grade.batch import Options
 from autograder.isolation import Limits
-from autograder.model import ASSIGNMENT
+from autograder.course import ASSIGNMENT
 from autograder.service.grading import Service
 from autograder.service.journal import Journal
 from autograder.service.policy import Policy

@@ -208,7 +208,7 @@ def test_a_submission_changing_after_it_was_noticed_is_retimed(service, q1):
 def test_a_gradebook_down_mid_run_is_caught_up(service, q1, monkeypatch):
     from nbgrader.api import Gradebook
 
-    from autograder.model import ASSIGNMENT
+    from autograder.course import ASSIGNMENT
     from autograder.outputs import gradebook
 
     svc = service()

@@ -10,7 +10,7 @@ import pytest
 from gradingtools import function_names
 from servicetools import exchange_page, honest, later, submit, with_cell
 
-from autograder.model import ASSIGNMENT
+from autograder.course import ASSIGNMENT
 from autograder.service import budget, loop
 from autograder.service.policy import Policy, attempts_line
 
