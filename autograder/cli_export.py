@@ -57,7 +57,8 @@ def main(args: argparse.Namespace) -> int:
     """Export the grades; the exit status (see the module docstring)."""
     root = Path(args.course).resolve()
     if not (root / "gradebook.db").is_file() and args.db_url is None:
-        print(f"error: no gradebook in {root}", file=sys.stderr)
+        print(f"error: no gradebook in {root}: run `python -m autograder grade` first, or pass "
+              "--course DIR (the course folder) or --db-url", file=sys.stderr)
         return 2
     try:
         due = _due(args.due)

@@ -68,7 +68,8 @@ def main(args: argparse.Namespace) -> int:
     root = Path(args.course).resolve()
     if not (root / "autograded").is_dir() or not Path(args.grading).is_dir():
         print(f"error: run `python -m autograder grade` first: no {root / 'autograded'} or "
-              f"no {args.grading}", file=sys.stderr)
+              f"no {args.grading} (a course folder other than ./course: pass --course DIR)",
+              file=sys.stderr)
         return 2
     try:
         db_url = resolve_db_url(args.db_url or default_db_url(root))

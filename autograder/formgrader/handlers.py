@@ -32,8 +32,9 @@ REFUSED = {
         "Nothing was done."),
     "generate_feedback": (
         "In 4F9 feedback is written by `python -m autograder feedback --grading grading/` "
-        "(docs/instructors.md, step 6): nbgrader's generate_feedback would copy the marker's "
-        "rubric into the students' pages. Nothing was done."),
+        "(docs/instructors.md, step 6): nbgrader's generate_feedback knows nothing of the "
+        "course's grader (its pages would lack the hidden cases' results and the explanations). "
+        "Nothing was done."),
 }
 
 

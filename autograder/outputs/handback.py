@@ -176,7 +176,7 @@ def _carry_files(autograded: Path, folder: Path) -> None:
 
 def missing_secrets(root: Path) -> list[str]:
     """Students whose feedback folder lacks a file ``release_feedback`` needs."""
-    return sorted(p.parent.parent.name for p in (root / "feedback").glob(f"*/{ASSIGNMENT}")
+    return sorted(p.parent.name for p in (root / "feedback").glob(f"*/{ASSIGNMENT}")
                   if any(not (p / n).is_file() for n in CARRIED_FILES))
 
 

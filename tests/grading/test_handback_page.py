@@ -188,3 +188,16 @@ def test_marks_are_listed_in_the_notebooks_order(sources, monkeypatch):
     got = handback.read_marks("sqlite:///unused.db", handback.cell_order(sources))
     assert [m.grade_id for m in got[0].marks] == [g for g, _ in graded]
     assert [m.written for m in got[0].marks] == [t == "markdown" for _, t in graded]
+
+
+def test_missing_secrets_names_the_students_whose_folder_lacks_nbgraders_files(tmp_path):
+    """A notebook placed in ``submitted/`` by hand has no ``timestamp.txt``: its student is named
+    (so ``feedback`` releases the others and says who was left out), not the folder above."""
+    from autograder.course import ASSIGNMENT
+
+    for student, carried in (("ab123", True), ("ef789", False)):
+        folder = tmp_path / "feedback" / student / ASSIGNMENT
+        folder.mkdir(parents=True)
+        for name in handback.CARRIED_FILES if carried else ():
+            (folder / name).write_text("x")
+    assert handback.missing_secrets(tmp_path) == ["ef789"]
