@@ -33,7 +33,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add = parser.add_argument
     add("--out", type=Path, required=True, help="folder for canvas.csv, moodle.csv and "
         "grades-long.csv")
-    add("--course", type=Path, default=DEFAULT_COURSE_ROOT,
+    add("--course", "--course-root", dest="course", type=Path, default=DEFAULT_COURSE_ROOT,
         help="the nbgrader course root (default: course/ in the repository)")
     add("--db-url", default=None, help="the gradebook (default sqlite:///<course>/gradebook.db)")
     add("--decimals", type=int, default=1, help="decimal places of every mark (default 1)")

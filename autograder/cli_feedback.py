@@ -29,7 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add = parser.add_argument
     add("--grading", type=Path, required=True,
         help="the --out folder of `python -m autograder grade` (its feedback/ pages)")
-    add("--course", type=Path, default=DEFAULT_COURSE_ROOT,
+    add("--course", "--course-root", dest="course", type=Path, default=DEFAULT_COURSE_ROOT,
         help="the nbgrader course root (default: course/ in the repository)")
     add("--db-url", default=None, help="the gradebook (default sqlite:///<course>/gradebook.db)")
     add("--no-release", action="store_true",

@@ -34,7 +34,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add = parser.add_argument
     add("--exchange", type=Path, required=True,
         help=f"nbgrader's exchange root (its {COURSE_ID}/inbound is watched)")
-    add("--course", type=Path, default=DEFAULT_COURSE_ROOT, help="the nbgrader course folder "
+    add("--course", "--course-root", dest="course", type=Path, default=DEFAULT_COURSE_ROOT,
+        help="the nbgrader course folder "
         "(gradebook, submitted/, feedback/, grading_service.json, service/journal.db)")
     add("--source", type=Path, default=None, help="folder of the source notebooks")
     add("--db-url", default=None, help="the gradebook (default sqlite:///COURSE/gradebook.db)")

@@ -137,6 +137,8 @@ def _grade(svc: Service, row: Row, collected: Path) -> list[NotebookOutcome]:
             # the grader's failure, never the student's: no attempt is charged; retried
             raise RuntimeError(f"the grader failed on every test of {src.name}")
         score = sum(r.score or 0.0 for r in auto)
+        functions = tuple(r.name for r in auto if r.kind is CellKind.FUNCTION)
+        ranked = sum(r.score or 0.0 for r in auto if r.kind is CellKind.FUNCTION)
         outcomes.append(NotebookOutcome(src.name, d, True, score, sum(r.max_score for r in auto),
                                         tuple((r.name, r.score, r.max_score, r.status.value)
                                               for r in rows)))
@@ -145,7 +147,7 @@ def _grade(svc: Service, row: Row, collected: Path) -> list[NotebookOutcome]:
         html = render(row.student, src.name, rows, lines[src.name])
         handout.write_atomic(_last_page(svc, row.student, src.name), html, 0o600)
         handout.hand_out(svc.course, svc.exchange, collected, row.student, src.name, html)
-        if _counts(svc, row, when, src.name, score):
+        if _counts(svc, row, when, src.name, ranked, functions):
             counting.append(src.name)
     _record(svc, row.student, collected, counting, results, subs)
     return outcomes
@@ -184,13 +186,19 @@ def _run(svc: Service, student: str, submitted: Path, sources: list[SourceNotebo
     return batch.results, batch.submissions
 
 
-def _counts(svc: Service, row: Row, when: dt.datetime, notebook: str, score: float) -> bool:
-    """Whether this graded notebook replaces the gradebook's (the policy's ``counts``)."""
+def _counts(svc: Service, row: Row, when: dt.datetime, notebook: str, ranked: float,
+            functions: tuple[str, ...]) -> bool:
+    """Whether this graded notebook replaces the gradebook's (the policy's ``counts``).
+
+    ``best`` ranks attempts by their graded functions alone (``ranked``), ties going to the
+    later: the choice and number items, whose right or wrong the pages do not show before the
+    due date, come with the attempt so chosen. Ranking by the whole score would let a student
+    who answers an item differently in each attempt keep the right answer without knowing it."""
     if svc.policy.counts == "last_before_due":
         return svc.policy.is_open(when)
     if svc.policy.counts == "best":
-        best = svc.journal.best_score(row.student, notebook, row.id)
-        return best is None or score >= best
+        best = svc.journal.best_score(row.student, notebook, row.id, functions)
+        return best is None or ranked >= best
     return True
 
 

@@ -174,12 +174,17 @@ class Journal:
             "ORDER BY time DESC, submission_id DESC LIMIT 1", (student, notebook)).fetchone()
         return found[0] if found else None
 
-    def best_score(self, student: str, notebook: str, before: int) -> float | None:
-        """The best automatic score of ``notebook`` over ``student``'s graded attempts in
-        submissions other than ``before`` (None when none)."""
+    def best_score(self, student: str, notebook: str, before: int,
+                   names: tuple[str, ...]) -> float | None:
+        """The best score of the graded cells ``names`` of ``notebook`` summed per attempt, over
+        ``student``'s graded attempts in submissions other than ``before`` (None when none)."""
+        marks = ",".join("?" * len(names)) or "NULL"
         found = self.db.execute(
-            "SELECT MAX(score) FROM notebooks WHERE student=? AND notebook=? AND graded=1 "
-            "AND submission_id != ?", (student, notebook, before)).fetchone()
+            "SELECT MAX(total) FROM (SELECT a.submission_id, SUM(COALESCE(a.score, 0)) AS total "
+            "FROM attempts a JOIN notebooks n ON n.submission_id = a.submission_id "
+            "AND n.notebook = a.notebook WHERE a.student=? AND a.notebook=? AND n.graded=1 "
+            f"AND a.submission_id != ? AND a.item IN ({marks}) GROUP BY a.submission_id)",
+            (student, notebook, before, *names)).fetchone()
         return found[0]
 
     def states(self) -> dict[str, int]:

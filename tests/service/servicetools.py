@@ -95,3 +95,15 @@ def reopen_service(tmp: Path, mode) -> Service:
                    Journal(course / "service" / "journal.db"), Policy(), sources, opts,
                    {s.name: 60.0 for s in sources}, f"sqlite:///{course / 'gradebook.db'}",
                    uid_of=own_uid)
+
+
+def auto_scores(svc, student, notebook) -> dict:
+    """``{test id: automatic score}`` of ``student``'s ``notebook`` in the service's gradebook."""
+    import warnings
+
+    from nbgrader.api import Gradebook
+
+    with warnings.catch_warnings(), Gradebook(svc.db_url, course_id="4f9") as gb:
+        warnings.simplefilter("ignore")
+        nb = gb.find_submission_notebook(notebook, ASSIGNMENT, student)
+        return {g.name: g.auto_score for g in nb.grades}

@@ -15,7 +15,7 @@ import re
 
 import numpy as np
 import pytest
-from servicetools import exchange_page, honest, later, submit, with_cell
+from servicetools import auto_scores, exchange_page, honest, later, submit, with_cell
 
 from autograder.exercises import REGISTRY
 from autograder.service import loop
@@ -90,3 +90,20 @@ def test_after_the_due_date_the_page_tells(service, q1):
     _folders, pages = _probe(svc, q1, item, [wrong])
     assert "recorded; revealed after the due date" not in pages[0]
     assert "automatically graded" in pages[0] and attempts_line(4, 5) in pages[0]
+
+
+def test_best_attempt_does_not_keep_an_item_the_student_only_guessed(service, q1):
+    """With ``counts: best``, a student who answers an item differently in each attempt (the
+    right letter first, a wrong one after, everything else the same) does not keep the right
+    one: attempts are ranked by their graded functions alone, ties going to the later, so the
+    gradebook holds the later, wrong letter (the registry's key decides which is right)."""
+    svc = service(attempts=5, counts="best")
+    item = "q1_item1"
+    ex = REGISTRY[item]
+    right = ex.key_for(STUDENT)
+    wrong = next(o for o in ex.options if o != right)
+    _probe(svc, q1, item, [right, wrong])
+    assert _scores(svc, item)[0] > 0 and _scores(svc, item)[1] == 0.0   # the grader knew
+    test_id = next(t for name, t, _ in q1.graded if name == item)
+    scores = auto_scores(svc, STUDENT, q1.name)
+    assert scores[test_id] == pytest.approx(0.0)

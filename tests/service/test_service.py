@@ -4,24 +4,14 @@ unchanged notebooks free, the time budget, and ``python -m autograder watch``.""
 from __future__ import annotations
 
 import os
-import warnings
 
 import pytest
 from gradingtools import function_names
-from servicetools import exchange_page, honest, later, submit, with_cell
+from servicetools import auto_scores, exchange_page, honest, later, submit, with_cell
 
 from autograder.course import ASSIGNMENT
 from autograder.service import budget, loop
 from autograder.service.policy import Policy, attempts_line
-
-
-def _auto_scores(svc, student, notebook):
-    from nbgrader.api import Gradebook
-
-    with warnings.catch_warnings(), Gradebook(svc.db_url, course_id="4f9") as gb:
-        warnings.simplefilter("ignore")
-        nb = gb.find_submission_notebook(notebook, ASSIGNMENT, student)
-        return {g.name: g.auto_score for g in nb.grades}
 
 
 def _broken(src, student):
@@ -39,12 +29,12 @@ def test_the_gradebook_keeps_what_the_policy_counts(service, q1, counts):
     submit(svc, "gb123", {q1.name: honest(q1, "gb123")})
     loop.notice(svc, now=later())
     loop.drain(svc)
-    assert _auto_scores(svc, "gb123", q1.name)[test_id] == pytest.approx(points)
+    assert auto_scores(svc, "gb123", q1.name)[test_id] == pytest.approx(points)
     submit(svc, "gb123", {q1.name: broken})       # a worse attempt afterwards
     loop.notice(svc, now=later())
     loop.drain(svc)
     expected = points if counts == "best" else 0.0
-    assert _auto_scores(svc, "gb123", q1.name)[test_id] == pytest.approx(expected)
+    assert auto_scores(svc, "gb123", q1.name)[test_id] == pytest.approx(expected)
     assert (svc.course / "submitted" / "gb123" / ASSIGNMENT / "timestamp.txt").is_file()
 
 
