@@ -88,7 +88,7 @@ def _user_name(uid: int) -> str:
 
 
 #: a submission deeper or larger than this is refused before anything is read (a folder 1900
-#: levels deep made nbgrader's own size count overflow Python's stack: red team 9)
+#: levels deep made nbgrader's own size count overflow Python's stack)
 MAX_DEPTH, MAX_ENTRIES = 16, 5000
 
 
@@ -141,8 +141,8 @@ def copy_submission(src: str, dest: str, uid: int, skipped, max_file_bytes: int,
     with ``O_NOFOLLOW``, checked *as opened* (a folder or regular file owned by ``uid``, a file
     with one name) and a folder is listed through its descriptor. A path checked and then
     swapped for a link is never followed: a file swapped for a link to ``/dev/zero`` filled the
-    disk through ``copytree`` (red team 9), folders swapped for links to big folders after the
-    check multiplied the copy (red team 10). Copies are 0640, folders 0750, with no set-id bits
+    disk through ``copytree``, folders swapped for links to big folders after the
+    check multiplied the copy. Copies are 0640, folders 0750, with no set-id bits
     or ACLs of the student's. ``skipped(name, st)`` says which entries nbgrader's rules leave
     out. Raises :class:`SubmissionRefused` past :data:`MAX_DEPTH`, :data:`MAX_ENTRIES`,
     ``max_file_bytes`` for a file or ``max_total_bytes`` (each entry costing at least
@@ -266,7 +266,7 @@ class PrivateExchangeCollect(ExchangeCollect):
 
     def _log_refusal(self, path, student, why):
         # every name and reason as a Python literal: a folder named with terminal escapes and
-        # a newline forged a "Collecting submission" line (red team 9)
+        # a newline forged a "Collecting submission" line
         self.log.warning("Refused %r, %r's submission: %r (nothing of it collected)",
                          path, student, str(why))
 
@@ -368,7 +368,7 @@ class PrivateExchangeCollect(ExchangeCollect):
 
     def _skipped(self, name: str, st: os.stat_result) -> bool:
         """nbgrader's ``ignore_patterns`` for one entry, on what ``lstat`` says of it (its own
-        log printed names raw: red team 10)."""
+        log printed names raw)."""
         coursedir = self.coursedir
         if any(fnmatch.fnmatch(name, pattern) for pattern in coursedir.ignore):
             return True

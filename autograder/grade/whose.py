@@ -1,4 +1,4 @@
-"""Whose numbers a submitted notebook worked (issue 11).
+"""Whose numbers a submitted notebook worked.
 
 The grader always judges number items and option letters for the student of the submission's
 folder. When the notebook shows it worked another id's numbers (a ``STUDENT_ID`` typed in a code

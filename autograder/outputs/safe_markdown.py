@@ -3,7 +3,7 @@
 nbgrader's Formgrader renders every markdown cell of an autograded notebook with nbconvert's
 ``markdown2html``, which passes raw HTML through, and shows raw cells verbatim. A written
 answer holding ``<script>``, ``<img onerror=...>``, ``<style>`` or a ``javascript:`` link
-therefore ran in the marker's browser, with the marker's session: red team 7 gave itself full
+therefore ran in the marker's browser, with the marker's session: a submission could give itself full
 marks on answers nobody had read and zeroed classmates' grades that way.
 
 Two layers, both set up for the course by :func:`autograder.course.config_text`:
@@ -78,7 +78,7 @@ def _allowed_attribute(tag: str, name: str, value: str) -> bool:
         return False
     if tag == "img" and name == "src":
         # only a picture the answer carries: any other address would be fetched with the
-        # marker's session (``/logout`` logged the marker out: red team 8) or tell a site when
+        # marker's session (``/logout`` would log the marker out) or tell a site when
         # the marking happens
         return bool(_RASTER_DATA_URL.match(value.strip()))
     if tag == "a" and name == "href" and value.strip().lower().startswith("data:"):
@@ -102,7 +102,7 @@ def clean_html(html: str) -> str:
 
 
 #: added to every picture *after* cleaning (the student's own styles are gone by then): a pasted
-#: picture 4 x 60,000 px pushed the rubric 60,000 px down the page (red team 10)
+#: picture 4 x 60,000 px pushed the rubric 60,000 px down the page
 _PICTURE_STYLE = "max-width: 100%; max-height: 40em; object-fit: contain"
 
 
@@ -126,7 +126,7 @@ def markdown2html(context, source: str) -> str:
         return _fitted_pictures(clean_html(MarkdownWithMath(renderer=renderer).render(source)))
     except Exception as err:  # noqa: BLE001 - one odd answer must not take the page down
         # (a missing or malformed attachment made the whole submission page a server error,
-        # so nothing of it could be marked: red team 8)
+        # so nothing of it could be marked)
         return (f"<p><em>This answer could not be shown as formatted text "
                 f"({html.escape(type(err).__name__)}); its source:</em></p>"
                 f"<pre>{html.escape(str(source))}</pre>")

@@ -1,6 +1,6 @@
 """Similarity evidence for the class report: near-copied solution cells and pasted references.
 
-Issue 11, part 3. For every graded name (one solution cell per exercise, see EXERCISES.md) this
+For every graded name (one solution cell per exercise, see EXERCISES.md) this
 module finds
 
 - pairs of students whose cells are near copies of each other once names, comments, docstrings
@@ -367,7 +367,7 @@ def shared_counts(prints: list[np.ndarray], limit: int) -> np.ndarray:
 def find_similar(cells: Mapping[str, Mapping[str, str]], references: Mapping[str, str] | None = None,
                  *, threshold: float = THRESHOLD, min_tokens: int = MIN_TOKENS,
                  k: int = K_GRAM, window: int = WINDOW, jobs: int = 1) -> list[Match]:
-    """Near-copied cells between students, and cells that copy the reference (issue 11.3).
+    """Near-copied cells between students, and cells that copy the reference.
 
     Parameters
     ----------
@@ -407,7 +407,7 @@ def find_similar(cells: Mapping[str, Mapping[str, str]], references: Mapping[str
 def find_pasted_references(code: Mapping[str, Iterable[str]], references: Mapping[str, str], *,
                            threshold: float = THRESHOLD, min_tokens: int = MIN_TOKENS,
                            k: int = K_GRAM, window: int = WINDOW, jobs: int = 1) -> list[Match]:
-    """Students whose solution code *anywhere* holds a reference (issue 11.3, red-team case).
+    """Students whose solution code *anywhere* holds a reference (a hidden copy).
 
     :func:`find_similar` compares each graded name's own cell with its reference; a reference
     pasted into another cell (behind a helper the graded cell calls) escapes it. Here ``code`` is

@@ -1,4 +1,4 @@
-"""The report's "Own numbers" section: answers that do not look like the student's own (issue 11),
+"""The report's "Own numbers" section: answers that do not look like the student's own,
 and the ``--graded-as`` decisions taken on that evidence.
 
 Two signs, for the instructor only (the student's feedback never names other ids before the
