@@ -70,7 +70,7 @@ def peer_statistics(results) -> dict:
     total, by_item = {}, {}
     for r in results:
         total[r.student] = total.get(r.student, 0.0) + (r.score or 0.0)
-        if not r.whole_notebook:
+        if not r.whole_notebook and r.max_score:   # practice items (0 marks) have no facility
             by_item.setdefault((r.notebook, r.grade_id), []).append(r)
     out = {}
     for key, rs in by_item.items():
