@@ -81,8 +81,17 @@ def mark(course: Path, student: str, notebook: str, grade_id: str, score: float,
             page.locator(".lm-Menu .lm-Menu-itemLabel").filter(
                 has_text=re.compile("^Formgrader$")).click()
             grader = page.frame_locator("iframe").first
-            for link in ("Manual Grading", "tripos2006", notebook):
+            # one page after the other: a link of the page being left (the assignments page has
+            # a "tripos2006" link too, to its source folder) must not be the one clicked
+            for link, path in (("Manual Grading", "/formgrader/gradebook"),
+                               ("tripos2006", "/formgrader/gradebook/tripos2006"),
+                               (notebook, f"/formgrader/gradebook/tripos2006/{notebook}")):
                 grader.get_by_role("link", name=link).click()
+                page.wait_for_function(
+                    "path => [...document.querySelectorAll('iframe')].some(f => f.contentWindow "
+                    "&& ('/' + f.contentWindow.location.pathname.split('/').filter(Boolean)"
+                    ".join('/')).endsWith(path) && f.contentDocument.readyState === 'complete')",
+                    arg=path)
             grader.get_by_role("link", name=re.compile(r"^Submission #1$")).wait_for()
             grader.get_by_text("Show All Names").click()
             grader.get_by_role("link", name=student).first.click()
