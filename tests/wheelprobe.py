@@ -28,8 +28,14 @@ import numpy as np
 #: hidden cases tried per exercise (those that must not raise)
 CASES_PER_EXERCISE = 6
 
+#: the probe's address space (bytes): a callable handed another exercise's arguments may ask
+#: for an enormous array (a photon count as an array size): it gets a MemoryError, which the
+#: probe counts as "no answer", instead of the machine's OOM killer (seen: 20 GB, SIGKILL)
+MEMORY_LIMIT = 8 << 30
+
 STUDENT_SIDE = r'''
-import importlib, inspect, io, os, pickle, pkgutil, signal, sys, warnings
+import importlib, inspect, io, os, pickle, pkgutil, resource, signal, sys, warnings
+resource.setrlimit(resource.RLIMIT_AS, (int(os.environ["PROBE_MEMORY_LIMIT"]),) * 2)
 import numpy as np
 warnings.simplefilter("ignore")
 os.environ.setdefault("MPLBACKEND", "Agg")
@@ -168,7 +174,8 @@ def find_answers(python: str | Path, workdir: Path, env: dict | None = None,
     sent = {name: [(pickle.dumps(a), pickle.dumps(kw), exp) for a, kw, exp, _ in rows]
             for name, rows in cases.items()}
     (workdir / "cases.pkl").write_bytes(pickle.dumps(sent))
-    env = dict(os.environ if env is None else env, MPLBACKEND="Agg")
+    env = dict(os.environ if env is None else env, MPLBACKEND="Agg",
+               PROBE_MEMORY_LIMIT=str(MEMORY_LIMIT))
     proc = subprocess.run([str(python), "-I", "-c", STUDENT_SIDE, "cases.pkl", "found.pkl",
                            package, *map(str, path)],
                           cwd=workdir, env=env, capture_output=True, text=True,
