@@ -38,6 +38,26 @@ def table(rows: list[Row]) -> str:
     return "\n".join(lines)
 
 
+RESULTS_INTRO = ("Ratios are ours / peer, measured side by side in the same run: below 1 means "
+                 "ours is faster or smaller.")
+
+
+def results_file(rows: list[Row], where: str, old: str | None = None) -> str:
+    """The text of ``results.md``: ``rows`` measured ``where``. With ``old`` (the file before a
+    run of some sections only), the other sections' rows and the lines saying when they were
+    measured are kept, so that ``--only`` re-measures a section without dropping the rest."""
+    sections_run = sorted({r.section for r in rows})
+    said = [f"Measured {where}" + (f": the rows of {', '.join(sections_run)}." if old else ".")]
+    kept: list[str] = []
+    if old is not None:
+        head, _, body = old.partition("\n| section ")
+        said += [ln for ln in head.splitlines()[1:] if ln.strip() and ln != RESULTS_INTRO]
+        kept = [ln for ln in body.splitlines()[2:]
+                if ln.startswith("| ") and ln.split("|")[1].strip() not in sections_run]
+    return ("# Benchmark results\n\n" + "\n".join(said) + f"\n{RESULTS_INTRO}\n\n"
+            + "\n".join([table(rows), *kept]) + "\n")
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m benchmarks", description=__doc__)
     p.add_argument("--smoke", action="store_true", help="tiny sizes: checks the benchmarks run")
@@ -61,10 +81,9 @@ def main(argv=None) -> int:
     out = args.out or (None if args.smoke else HERE / "results.md")
     if out is not None:
         stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-        out.write_text(
-            f"# Benchmark results\n\nMeasured {stamp} on {machine_summary()}"
-            f"{' (smoke sizes)' if args.smoke else ''}.\nRatios are ours / peer, measured side by "
-            f"side in the same run: below 1 means ours is faster or smaller.\n\n{text}\n")
+        where = f"{stamp} on {machine_summary()}{' (smoke sizes)' if args.smoke else ''}"
+        old = out.read_text() if args.only and out.exists() else None
+        out.write_text(results_file(rows, where, old))
         print(f"wrote {out}", file=sys.stderr)
     if failed:
         print(f"sections that failed: {', '.join(failed)}", file=sys.stderr)

@@ -66,3 +66,20 @@ def test_ratio_is_ours_over_peer():
     assert Row("s", "c", "m", 2.0, 4.0).ratio == 0.5
     assert Row("s", "c", "m", 2.0).ratio is None
     assert Row("s", "c", "m", math.nan, 4.0).ratio is None  # not measured: no ratio
+
+
+def test_a_run_of_one_section_keeps_the_other_sections_rows():
+    """``--only bench_x`` replaces that section's rows in ``results.md`` and keeps the rest."""
+    from benchmarks.__main__ import RESULTS_INTRO, results_file, table
+    from benchmarks.harness import Row
+
+    def row(section, case, ours):
+        return Row(section=section, case=case, metric="time", ours=ours, peer=2.0, unit="s",
+                   peer_name="peer", notes="")
+
+    old = results_file([row("browser", "a", 1.0), row("grading", "b", 3.0)], "day one")
+    new = results_file([row("browser", "a", 0.5)], "day two", old)
+    rows = _table_rows(new)
+    assert [(r[0], r[3]) for r in rows] == [("browser", "0.5 s"), ("grading", "3 s")]
+    assert "Measured day two: the rows of browser." in new and "Measured day one." in new
+    assert new.count(RESULTS_INTRO) == 1 and new.count(table([]).splitlines()[0]) == 1
