@@ -26,7 +26,7 @@ def test_a_hand_placed_submission_is_graded_with_a_warning_and_never_late(tmp_pa
     # collected by nbgrader: a day and a minute after the due date below
     (submitted / "tl456" / ASSIGNMENT / "timestamp.txt").write_text(
         "2026-03-14 16:01:00.000000 UTC")
-    proc = run_grade(submitted, tmp_path / "grading")
+    proc = run_grade(submitted, tmp_path / "grading")     # no course root: the gradebook in OUT
 
     warnings = [line for line in proc.stderr.splitlines() if "timestamp.txt" in line]
     assert len(warnings) == 1, proc.stderr[-3000:]
@@ -34,7 +34,7 @@ def test_a_hand_placed_submission_is_graded_with_a_warning_and_never_late(tmp_pa
     assert "tl456" not in proc.stderr.replace(str(tmp_path), "")
 
     rows = {r.student: r for r in read_gradebook(
-        f"sqlite:///{tmp_path / 'course' / 'gradebook.db'}", [q1.name])}
+        f"sqlite:///{tmp_path / 'grading' / 'gradebook.db'}", [q1.name])}
     assert rows["hp123"].timestamp is None
     assert rows["tl456"].timestamp.replace(tzinfo=None) == dt.datetime(2026, 3, 14, 16, 1)
     # both graded alike (same model answers), and both earned marks to lose
