@@ -6,7 +6,9 @@ launcher, the hardened grader and the tests all agree on one layout::
     <root>/nbgrader_config.py
     <root>/gradebook.db                      (default gradebook, ``sqlite:///<root>/gradebook.db``)
     <root>/source/tripos2006/qN_*.ipynb      (the instructor's notebooks, copied from notebooks/)
-    <root>/release/tripos2006/qN_*.ipynb     (``nbgrader generate_assignment``: solutions stubbed)
+    <root>/release/tripos2006/qN_*.ipynb     (``nbgrader generate_assignment``: solutions stubbed,
+                                              the grading service's policy in the first cell)
+    <root>/grading_service.json              (the grading service's policy, optional)
     <root>/submitted/<student>/tripos2006/
     <root>/autograded/<student>/tripos2006/
     <root>/feedback/<student>/tripos2006/
@@ -31,6 +33,7 @@ from pathlib import Path
 from course_lib.variants import ASSIGNMENT
 
 from . import explanations
+from .service.policy import PARAGRAPH_MARK, load_policy, policy_paragraph
 
 #: ``ASSIGNMENT``: the nbgrader assignment that holds all six question notebooks, named once in
 #: ``course_lib.variants`` (each student's numbers are drawn from it, and that module ships to
@@ -245,8 +248,11 @@ def prepare_course(
 
     Copies the source notebooks into ``root/source/tripos2006/``, writes
     ``root/nbgrader_config.py``, registers the assignment in the gradebook and runs
-    ``nbgrader generate_assignment tripos2006 --force``. Re-running with unchanged sources and
-    configuration skips nbgrader altogether (a stamp file records what was released).
+    ``nbgrader generate_assignment tripos2006 --force``, then states the grading service's
+    policy (``root/grading_service.json``, or the defaults) in each release notebook's first
+    cell (:func:`state_policy`). Re-running with unchanged sources, configuration and policy
+    skips nbgrader altogether (a stamp file records what was released). ``ValueError`` naming
+    the policy file when it is bad.
     """
     root = Path(root).resolve()
     notebooks = [Path(p) for p in (notebooks if notebooks is not None else source_notebooks())]
@@ -291,7 +297,9 @@ def _prepare(course: CourseDir, notebooks: list[Path], names: list[str]) -> Cour
     root, db_url = course.root, course.db_url
     exchange = root / "exchange"
     config = config_text(db_url, exchange_root=exchange)
-    digest = _digest(notebooks, config)
+    # the policy in force is part of what is released: a changed policy file releases again
+    policy = policy_paragraph(load_policy(root))
+    digest = _digest(notebooks, config + policy)
     stamp = root / _STAMP
     expected = sorted(names)
     db_file = _sqlite_file(db_url)
@@ -331,6 +339,7 @@ def _prepare(course: CourseDir, notebooks: list[Path], names: list[str]) -> Cour
     run_nbgrader(["generate_assignment", ASSIGNMENT, "--force"], root, db_url)
     for released_nb in course.release_dir.glob("*.ipynb"):
         explanations.strip(released_nb)      # an item's explanation comes with the feedback
+        state_policy(released_nb, policy)
     released = sorted(p.name for p in course.release_dir.glob("*.ipynb"))
     if released != expected:
         raise RuntimeError(f"generate_assignment released {released}, expected {expected}")
@@ -340,6 +349,25 @@ def _prepare(course: CourseDir, notebooks: list[Path], names: list[str]) -> Cour
         + "\n"
     )
     return course
+
+
+def state_policy(path: Path, paragraph: str) -> None:
+    """End the first markdown cell of notebook ``path`` with ``paragraph``, the grading
+    service's policy in words (:func:`autograder.service.policy.policy_paragraph`: attempts per
+    day, what a page shows before the due date, which attempt counts), replacing an earlier
+    statement rather than adding a second. That cell carries no nbgrader metadata, so no
+    checksum changes; ``ValueError`` when the notebook has no markdown cell."""
+    import nbformat
+
+    nb = nbformat.read(str(path), as_version=4)
+    cell = next((c for c in nb.cells if c.cell_type == "markdown"), None)
+    if cell is None:
+        raise ValueError(f"{Path(path).name}: no markdown cell to state the grading policy in")
+    kept = cell.source.split(PARAGRAPH_MARK, 1)[0].rstrip()
+    source = f"{kept}\n\n{paragraph}" if kept else paragraph
+    if source != cell.source:
+        cell.source = source
+        nbformat.write(nb, str(path))
 
 
 def _sha(path: Path) -> str:

@@ -7,7 +7,9 @@ after a leak check: no solution or hidden-test delimiters, no import of the in-k
 (``autograder.incell``), no model answer of a manually graded cell, no item's explanation
 (:mod:`autograder.explanations`: it comes with the feedback), no outputs; and every
 solution and test code cell tagged ``raises-exception``, so that Run All on an untouched release
-runs past the stubs to every figure and explorer. With ``--out`` the command also writes what
+runs past the stubs to every figure and explorer. Each notebook's first cell ends with the
+grading service's policy in words, from ``COURSE_ROOT/grading_service.json`` at release time
+(:func:`autograder.course.state_policy`). With ``--out`` the command also writes what
 students install, ``--out/student/`` (a wheel of ``course_lib`` whose graded references are
 compiled, and a README: :mod:`autograder.student_bundle`).
 
@@ -178,7 +180,7 @@ def main(args: argparse.Namespace) -> int:
     except (ReleaseLeak, student_bundle.WheelLeak) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    except RuntimeError as exc:
+    except (RuntimeError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     for path in written:

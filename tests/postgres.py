@@ -10,6 +10,7 @@ that need an empty gradebook call :func:`fresh_database`.
     server = start_server()
     url = fresh_database(server.url(), "gradebook_a")   # postgresql+psycopg://...
     ...
+    server.halt(); server.resume()                      # a crash and a restart, data kept
     server.stop()
 """
 
@@ -92,6 +93,22 @@ class PostgresServer:
     def url(self, database: str = "postgres") -> str:
         """An SQLAlchemy URL of ``database`` on this server (psycopg 3, as the superuser)."""
         return f"postgresql+psycopg://{SUPERUSER}@127.0.0.1:{self.port}/{database}"
+
+    def halt(self) -> None:
+        """Stop the server at once (as a crash would: ``-m immediate``), keeping its data for
+        :meth:`resume`."""
+        done = self._run("pg_ctl", "-D", str(self.data), "-m", "immediate", "-w", "stop",
+                         timeout=60)
+        if done.returncode != 0:
+            raise RuntimeError(f"pg_ctl stop failed: {done.stderr[-1000:]}")
+
+    def resume(self) -> None:
+        """Start a server :meth:`halt` stopped, on the same port and data."""
+        done = self._run("pg_ctl", "-D", str(self.data), "-l", str(self.base / "server.log"),
+                         "-w", "-t", "60", "-o", f"-p {self.port} -k {self.base} {SETTINGS}",
+                         "start")
+        if done.returncode != 0:
+            raise RuntimeError(f"pg_ctl start failed: {done.stderr[-1000:]}")
 
     def stop(self) -> None:
         """Stop the server at once and remove its folder."""

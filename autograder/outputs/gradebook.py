@@ -165,6 +165,8 @@ def sync(batch: Batch, sources: list[SourceNotebook], submitted: Path, out: Path
             if student not in known:
                 gb.add_student(student)
             timestamp = _timestamp(Path(submitted) / student / ASSIGNMENT)
+            if timestamp is None:
+                _warn_no_time(student, Path(submitted) / student / ASSIGNMENT)
             try:
                 sub = gb.find_submission(ASSIGNMENT, student)
                 if timestamp is not None:
@@ -227,6 +229,23 @@ def set_automatic_score(grade, r: CellResult) -> None:
     else:
         grade.auto_score = float(r.score or 0.0)
         grade.needs_manual_grade = False
+
+
+def _warn_no_time(student: str, folder: Path) -> None:
+    """Say, naming the student, that a submission has no hand-in time the late rules can use
+    (a folder put in ``submitted/`` by hand rather than by ``nbgrader collect`` or the service:
+    ``export`` then never counts it late)."""
+    ts = folder / "timestamp.txt"
+    why = ("has an unreadable timestamp.txt" if ts.is_file() and not ts.is_symlink()
+           else "has no timestamp.txt")
+    print(f"warning: {student}'s submission ({folder}) {why}: the gradebook records no hand-in "
+          "time for it (an earlier one, if any, is kept), so `export` never counts it late; "
+          f"write its time, e.g. `{_EXAMPLE_STAMP}`, to {ts} and grade again to apply the late "
+          "rules", file=sys.stderr)
+
+
+#: a hand-in time as nbgrader writes it in ``timestamp.txt``
+_EXAMPLE_STAMP = "2026-03-13 15:59:00.000000 UTC"
 
 
 def _timestamp(folder: Path):

@@ -18,7 +18,7 @@ import os
 import sys
 from pathlib import Path
 
-from ..course import COURSE_ID, DEFAULT_COURSE_ROOT, default_db_url
+from ..course import COURSE_ID, DEFAULT_COURSE_ROOT, NOTEBOOKS_DIR, default_db_url
 from ..grade.batch import Options
 from ..grade.secret import read_secret
 from ..grade.sources import default_sources, load_source
@@ -30,27 +30,37 @@ from .policy import load_policy
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The options of ``watch``."""
+    """The options of ``watch``; each help text states its default (``watch --help``)."""
+    from ..grade.secret import DEFAULT_SECRET
+
     add = parser.add_argument
     add("--exchange", type=Path, required=True,
-        help=f"nbgrader's exchange root (its {COURSE_ID}/inbound is watched)")
+        help=f"nbgrader's exchange root (its {COURSE_ID}/inbound is watched); required")
     add("--course", "--course-root", dest="course", type=Path, default=DEFAULT_COURSE_ROOT,
-        help="the nbgrader course folder "
-        "(gradebook, submitted/, feedback/, grading_service.json, service/journal.db)")
-    add("--source", type=Path, default=None, help="folder of the source notebooks")
-    add("--db-url", default=None, help="the gradebook (default sqlite:///COURSE/gradebook.db)")
-    add("--no-gradebook", action="store_true", help="feedback only; the gradebook untouched")
-    add("--poll", type=float, default=2.0, help="seconds between looks at the inbound")
+        help="the nbgrader course folder (gradebook, submitted/, feedback/, "
+        "grading_service.json, service/journal.db); default: %(default)s")
+    add("--source", type=Path, default=None, help="folder of the source notebooks; default: "
+        f"{NOTEBOOKS_DIR}")
+    add("--db-url", default=None, help="the gradebook; default: sqlite:///COURSE/gradebook.db")
+    add("--no-gradebook", action="store_true",
+        help="feedback only, the gradebook untouched; default: off (the gradebook is updated)")
+    add("--poll", type=float, default=2.0,
+        help="seconds between looks at the inbound; default: %(default)g")
     add("--jobs", type=int, default=max(1, min(8, os.cpu_count() or 1)),
-        help="sandboxes run in parallel for a submission's notebooks (default: the CPUs, at most 8)")
-    add("--timeout", type=float, default=10.0, help="time limit per case, in seconds")
-    add("--memory-mb", type=int, default=2048, help="memory limit of each sandbox, in MB")
-    add("--secret-file", type=Path, default=None, help="the course secret (as for grade)")
+        help="sandboxes run in parallel for a submission's notebooks; default: the CPUs, at "
+        "most 8 (here %(default)s)")
+    add("--timeout", type=float, default=10.0,
+        help="time limit per case, in seconds; default: %(default)g")
+    add("--memory-mb", type=int, default=2048,
+        help="memory limit of each sandbox, in MB; default: %(default)s")
+    add("--secret-file", type=Path, default=None,
+        help=f"the course secret (as for grade); default: {DEFAULT_SECRET}")
     add("--reference-seconds", type=float, default=None, help="take this as every notebook's "
-        "reference cost instead of measuring it at start-up")
-    add("--once", action="store_true", help="grade what is there, then stop")
+        "reference cost; default: measured at start-up by grading the model answers once")
+    add("--once", action="store_true",
+        help="grade what is there, then stop; default: off (serve until stopped)")
     add("--unsafe-no-isolation", action="store_true",
-        help="grade without the sandbox (never on real student work)")
+        help="grade without the sandbox (never on real student work); default: off")
 
 
 def _mode(args) -> Mode | None:

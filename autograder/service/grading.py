@@ -25,7 +25,8 @@ from . import handout, inbox, pages
 from .journal import Journal, NotebookOutcome, Row
 from .policy import Policy, attempts_line
 
-#: seconds before a submission that met a full disk is tried again
+#: seconds before a postponed submission (a full disk, the gradebook down, a grader error) is
+#: tried again
 DISK_RETRY = 60.0
 #: tries before a submission whose grading keeps failing is left ``failed`` (the instructor
 #: re-queues it after fixing the cause: ``UPDATE submissions SET state='queued'``)
@@ -70,6 +71,7 @@ def process(svc: Service, row: Row) -> str:
     svc.journal.start(row)
     folder = svc.work / str(row.id)
     try:
+        ping_gradebook(svc.db_url)                  # down: no sandbox time spent in vain
         shutil.rmtree(folder, ignore_errors=True)   # a killed run's half copy
         collected = inbox.collect(svc.inbound, row.folder, row.student, row.ctime_ns, folder,
                                   svc.uid_of)
@@ -85,7 +87,7 @@ def process(svc: Service, row: Row) -> str:
     except OSError as exc:
         if exc.errno != errno.ENOSPC:
             return _retry_or_fail(svc, row, exc)
-        svc.journal.postpone(row, f"disk full: {exc}", DISK_RETRY)
+        svc.journal.postpone(row, f"disk full: {exc}", DISK_RETRY, count_try=False)
         print(f"error: the disk is full ({exc}); submission {row.folder} is kept in the "
               f"queue and tried again in {DISK_RETRY:g} s", file=sys.stderr)
         return f"{row.student}: disk full; kept and retried later"
@@ -93,7 +95,48 @@ def process(svc: Service, row: Row) -> str:
         svc.journal.fail(row, f"refused: {why}")
         return f"{row.student}: refused ({why})"
     except Exception as exc:  # noqa: BLE001 - one submission never stops the service
+        if _gradebook_unreachable(exc):
+            return _wait_for_gradebook(svc, row, exc)
         return _retry_or_fail(svc, row, exc)
+
+
+def _gradebook_unreachable(exc: BaseException) -> bool:
+    """Whether ``exc`` says the gradebook's database could not be reached or dropped the
+    connection (a PostgreSQL server stopped or restarting, a locked SQLite file), rather than
+    anything about the submission."""
+    try:
+        from sqlalchemy.exc import DBAPIError, OperationalError
+    except ImportError:
+        return False
+    return isinstance(exc, OperationalError) or (
+        isinstance(exc, DBAPIError) and bool(exc.connection_invalidated))
+
+
+def ping_gradebook(db_url: str | None) -> None:
+    """Open and close one connection to a gradebook server (SQLite files and no gradebook
+    are skipped): raises SQLAlchemy's ``OperationalError`` when it cannot be reached, before
+    nbgrader's ``Gradebook`` would take the failure for an empty database and try to create
+    the course again."""
+    if db_url is None or db_url.startswith("sqlite"):
+        return
+    from sqlalchemy import create_engine, text
+
+    engine = create_engine(db_url)
+    try:
+        with engine.connect() as con:
+            con.execute(text("SELECT 1"))
+    finally:
+        engine.dispose()
+
+
+def _wait_for_gradebook(svc: Service, row: Row, exc: BaseException) -> str:
+    """Keep the submission queued for as long as the gradebook is down: nothing was counted
+    (the attempts are written only with ``done``), and this try is not held against it."""
+    first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+    svc.journal.postpone(row, f"gradebook unreachable: {first}", DISK_RETRY, count_try=False)
+    print(f"error: the gradebook cannot be reached ({first}); submission {row.folder} is kept "
+          f"in the queue and tried again in {DISK_RETRY:g} s", file=sys.stderr)
+    return f"{row.student}: gradebook unreachable; kept and retried later"
 
 
 def _retry_or_fail(svc: Service, row: Row, exc: BaseException) -> str:
@@ -208,6 +251,7 @@ def _record(svc: Service, student: str, collected: Path, counting: list[str],
     (markers' scores and comments untouched: :func:`autograder.outputs.gradebook.sync`)."""
     if not counting:
         return
+    ping_gradebook(svc.db_url)      # submitted/ and the gradebook change together or not at all
     handout.keep_counting(svc.course, collected, student, counting)
     if svc.db_url is None:
         return

@@ -104,14 +104,18 @@ class Journal:
     def next_ready(self, now: float | None = None) -> Row | None:
         """The next submission to grade: round-robin over students (the one served longest
         ago, or never, first), each student's own submissions in the order the exchange saw
-        them. A student's later submissions wait behind their own, never the class's."""
+        them. A student's later submissions wait behind their own, never the class's: also
+        behind an earlier one postponed for a retry (a gradebook or a disk that failed it), or
+        the later would be graded first and the earlier would then replace it as the last."""
         now = time.time() if now is None else now
         cur = self.db.execute(
             "SELECT s.id, s.folder, s.student, s.ctime_ns, s.state, s.tries FROM submissions s "
             "LEFT JOIN (SELECT student, MAX(finished) AS last FROM submissions "
             "           GROUP BY student) d "
             "ON d.student = s.student "
-            "WHERE s.state='queued' AND s.retry_at <= ? "
+            "WHERE s.state='queued' AND s.retry_at <= ? AND NOT EXISTS (SELECT 1 FROM "
+            "submissions e WHERE e.student = s.student AND e.state IN ('queued', 'grading') "
+            "AND (e.ctime_ns < s.ctime_ns OR (e.ctime_ns = s.ctime_ns AND e.id < s.id))) "
             "ORDER BY COALESCE(d.last, 0), s.ctime_ns, s.id LIMIT 1", (now,))
         found = cur.fetchone()
         return Row(*found) if found else None
@@ -120,10 +124,13 @@ class Journal:
         self.db.execute("UPDATE submissions SET state='grading', tries=tries+1 WHERE id=?",
                         (row.id,))
 
-    def postpone(self, row: Row, why: str, delay: float) -> None:
-        """Back to the queue, not before ``delay`` seconds (e.g. a full disk)."""
-        self.db.execute("UPDATE submissions SET state='queued', retry_at=?, error=? WHERE id=?",
-                        (time.time() + delay, why, row.id))
+    def postpone(self, row: Row, why: str, delay: float, count_try: bool = True) -> None:
+        """Back to the queue, not before ``delay`` seconds (e.g. a full disk). With
+        ``count_try`` False this try is not counted against the submission (the fault was the
+        course's, such as a gradebook server down, however long it stays down)."""
+        self.db.execute("UPDATE submissions SET state='queued', retry_at=?, error=?, "
+                        "tries=tries - ? WHERE id=?",
+                        (time.time() + delay, why, 0 if count_try else 1, row.id))
 
     def retime(self, row: Row, ctime_ns: int) -> None:
         """The submission changed after it was noticed: its time is the newer one."""

@@ -117,3 +117,39 @@ def policy_from(data, where: str = "the policy") -> Policy:
         return Policy(**data)
     except (ValueError, TypeError) as exc:
         raise ValueError(f"{where}: {exc}") from exc
+
+
+#: the first words of the paragraph :func:`policy_paragraph` writes (the release finds and
+#: replaces an earlier one by them)
+PARAGRAPH_MARK = "**Graded attempts and feedback while the assignment is open.**"
+
+_COUNTS_TEXT = {
+    "last": "your last graded attempt of each notebook, even one after the due date (the late "
+            "rules then apply to its time)",
+    "last_before_due": "your last graded attempt of each notebook before the due date; later "
+                       "attempts get feedback only",
+    "best": "for each notebook, your best graded attempt, ranked by its graded functions' score "
+            "(a tie goes to the later attempt), with the choice and number answers it holds",
+}
+
+
+def policy_paragraph(policy: Policy) -> str:
+    """The policy in words for students, as the release states it in each notebook's first
+    cell: attempts per day, what a page shows before the due date, which attempt counts."""
+    reveal = ("No due date is set yet, so their verdicts come only in the feedback your "
+              "instructor returns after the term." if policy.due is None else
+              "Their verdicts are shown from the due date on, "
+              f"{policy.due.astimezone(dt.timezone.utc):%Y-%m-%d %H:%M} UTC.")
+    plural = "attempt" if policy.attempts == 1 else "attempts"
+    return (
+        f"{PARAGRAPH_MARK} Press **Submit** in the Assignments panel, then **Fetch Feedback**: "
+        "the course's grading service grades each notebook you changed and hands back a "
+        f"feedback page. You have **{policy.attempts} graded {plural} per notebook per day** "
+        f"(midnight to midnight, {policy.timezone} time); a notebook submitted unchanged costs "
+        "no attempt, and every page says how many are left today (such as \""
+        f"{attempts_line(max(0, policy.attempts - 1), policy.attempts)}\"). Before the due "
+        "date a page shows each graded function's score, its visible test cases in full and "
+        "how many of its hidden cases passed; multiple-choice and number answers are recorded "
+        f"but not marked right or wrong, and no total is shown. {reveal} "
+        f"What counts for your mark: {_COUNTS_TEXT[policy.counts]}."
+    )

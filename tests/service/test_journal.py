@@ -83,3 +83,29 @@ def test_postponed_until_its_time(tmp_path):
     assert j.next_ready() is None
     import time
     assert j.next_ready(time.time() + 61).folder == "ana+0"
+
+
+def test_a_later_submission_waits_behind_its_students_postponed_one(tmp_path):
+    """ana's first submission met a gradebook that was down and waits for its retry; her second
+    must not be graded before it (the first would then replace it as her last), while bo, whose
+    queue holds nothing postponed, is served at once."""
+    import time
+
+    j = Journal(tmp_path / "j.db")
+    j.notice("ana+0", "ana", 100)
+    first = j.next_ready()
+    j.start(first)
+    j.postpone(first, "gradebook unreachable", 60, count_try=False)
+    j.notice("ana+1", "ana", 200)
+    j.notice("bo+0", "bo", 300)
+    assert j.next_ready().folder == "bo+0"
+    j.start(j.row_of("bo+0"))
+    j.finish(j.row_of("bo+0"), [])
+    assert j.next_ready() is None                        # ana+1 waits behind ana+0
+    later = time.time() + 61
+    assert j.next_ready(later).folder == "ana+0"
+    assert j.row_of("ana+0").tries == 0                   # the gradebook's fault, not counted
+    j.start(j.row_of("ana+0"))
+    assert j.next_ready(later) is None                    # still behind ana+0, now grading
+    j.finish(j.row_of("ana+0"), [])
+    assert j.next_ready(later).folder == "ana+1"
