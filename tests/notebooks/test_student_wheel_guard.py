@@ -39,6 +39,8 @@ def _fit_members() -> list[str]:
                f"{DATA}/labconfig/page_config.d/4f9-student.json",
                f"{DATA}/jupyter_server_config.d/zz-4f9-student.json"]
     for module in _library_modules():
+        if module.replace("/", ".") in student_bundle.INSTRUCTORS_ONLY:
+            continue
         readable = module.endswith("__init__") or module == "course_lib/answers"
         members.append(module + (".py" if readable else SO))
     return members
@@ -66,9 +68,18 @@ def test_guard_names_each_leak(tmp_path, extra, complaint):
 
 
 def test_guard_names_a_module_left_uncompiled(tmp_path):
-    members = [m for m in _fit_members() if not m.startswith("course_lib/mesh.")]
+    members = [m for m in _fit_members() if not m.startswith("course_lib/clipping.")]
     problems = student_bundle.wheel_problems(_forge(tmp_path / "short.whl", members))
-    assert problems == ["course_lib.mesh: no compiled extension in the wheel"]
+    assert problems == ["course_lib.clipping: no compiled extension in the wheel"]
+
+
+def test_guard_names_a_module_the_wheel_leaves_out(tmp_path):
+    """``course_lib.mesh`` (the volume of Q3(d)) is instructors-only: in any form, it is a leak."""
+    assert "course_lib.mesh" in student_bundle.INSTRUCTORS_ONLY
+    for member in ("course_lib/mesh" + SO, "course_lib/mesh.py"):
+        problems = student_bundle.wheel_problems(_forge(tmp_path / "extra.whl",
+                                                        _fit_members() + [member]))
+        assert f"{member}: a module the students' wheel leaves out" in problems, problems
 
 
 @pytest.mark.skipif(sys.version_info < (3, 11), reason="tomllib")
