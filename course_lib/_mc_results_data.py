@@ -73,8 +73,8 @@ def load() -> dict:
     return out
 
 
-STUDENTS_COPY = '''"""The numbers behind Q3's fixed figures and cells, computed by the course's references when
-this copy of the library was built (the copy holds the results, not the functions)."""
+STUDENTS_COPY = '''"""The numbers behind Q3's fixed figures and cells, computed by the course's
+references when this copy of the library was built (it holds the results, not the functions)."""
 
 import base64
 import functools

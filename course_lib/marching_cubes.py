@@ -31,6 +31,15 @@ here; every mesh built from :data:`TRI_TABLE` is watertight, and mixing it with
 :data:`ALT_TRI_TABLE` opens the holes of Q3(c). Their faces are wound so that normals point up
 the gradient of the data, away from the inside: a blob of low values gets a positive enclosed
 volume from :func:`course_lib.mesh.mesh_volume` (Q3(d)).
+
+The students' copy
+------------------
+Students' wheel holds the tables, the symmetry classes and :func:`closes_up` (the visible test
+of Q3(c)), not the graded functions nor anything that marches a volume (:func:`cube_index`,
+:func:`interpolate_edge`, :func:`marching_cubes`, :func:`marching_cubes_loop`,
+:func:`cell_triangles`, :func:`hole_demo`, :func:`probe_triangulation`); its figures read the
+references' results on their fixed inputs from :mod:`course_lib.mc_results`
+(docs/students-copy.md).
 """
 
 from __future__ import annotations
@@ -706,8 +715,9 @@ def cell_triangles(values, iso, alternative: bool = False) -> np.ndarray:
 
     ``values`` are the eight corner values (corner order of this module); the case comes from
     :func:`cube_index`, the triangles from :data:`TRI_TABLE` (or :data:`ALT_TRI_TABLE`), and
-    each vertex is interpolated along its edge (:func:`interpolate_edge`). Used by the figures
-    and the case explorer.
+    each vertex is interpolated along its edge (:func:`interpolate_edge`). The tests check the
+    case figures' own triangles (:func:`course_lib.plots.marching_cubes.drawn_triangles`) against
+    it; like the march, it is not in the students' copy.
     """
     values = as_vectors(values, 8, "values")
     if values.shape != (8,):
