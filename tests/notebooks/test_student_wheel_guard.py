@@ -127,7 +127,9 @@ def test_staged_library_imports_without_the_left_out_functions(tmp_path):
     import subprocess
 
     stage = student_bundle.stage_sources(tmp_path, "0" * 64)
-    withheld = student_bundle.withheld_functions()
+    withheld = student_bundle.left_out()          # graded functions and their helpers
+    assert "marching_cubes_loop" in withheld["course_lib.marching_cubes"]
+    assert not (stage / "course_lib" / "mesh.py").exists()
     code = ("import importlib, json, pkgutil, sys, course_lib\n"
             "assert course_lib.__file__.startswith(sys.argv[1]), course_lib.__file__\n"
             "mods = [m.name for m in pkgutil.walk_packages(course_lib.__path__, 'course_lib.')]\n"
@@ -147,4 +149,12 @@ def test_staging_refuses_a_module_that_uses_a_function_left_out_elsewhere(tmp_pa
     monkeypatch.setattr(student_bundle, "withheld_functions",
                         lambda: {"course_lib.gamma_camera": ("collimator_resolution",)})
     with pytest.raises(ValueError, match=r"gamma_camera\.py names \['collimator_resolution'\]"):
+        student_bundle.stage_sources(tmp_path, "0" * 64)
+
+
+def test_staging_refuses_a_module_that_imports_an_instructors_only_module(tmp_path, monkeypatch):
+    """Were the tables instructors-only, the march's module (which imports them) could not ship:
+    the build names it instead of shipping a module that fails to import."""
+    monkeypatch.setattr(student_bundle, "INSTRUCTORS_ONLY", ("course_lib._mc_tables",))
+    with pytest.raises(ValueError, match=r"marching_cubes\.py imports \['course_lib\._mc_tables"):
         student_bundle.stage_sources(tmp_path, "0" * 64)
