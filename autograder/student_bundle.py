@@ -56,13 +56,24 @@ SHIPPED_AS_SOURCE = ("course_lib.answers", "course_lib.variants")
 STILL_SHIPPED = frozenset({
     "displayed_thickness",                                               # q1 B-scan explorer
     "collimator_resolution", "open_fraction", "pmt_gain", "ring_hole_positions",  # q2
-    "cube_index", "interpolate_edge", "marching_cubes",                   # q3 marching cubes
-    "is_closed_consistent", "mesh_volume", "triangle_projected_volume",   # q3 volume figures
     "end_derivatives", "end_rows", "parameter_row", "phantom_point",      # q4 explorer, figures
     "catmull_rom_basis", "bspline_basis",                                 # q4 splines.basis
     "normalize", "reflect", "halfway", "phong", "blinn_phong",            # q5 Phong explorer
     "clip_polygon", "fan_triangulate", "inside_view_volume", "screen_area", "to_screen",  # q6
 })
+#: helpers the students' wheel leaves out with the graded functions: each computes a left-out
+#: function's answer (or part of it) or calls one; ``{module: (function, ...)}``
+LEFT_OUT_HELPERS = {
+    "course_lib.marching_cubes": (
+        "_check_volume", "_active_cells", "_march", "_axis_vertices", "marching_cubes_loop",
+        "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation"),
+}
+#: modules the students' wheel does not carry at all (nothing of the students' copy needs
+#: them; no shipped module may import them)
+INSTRUCTORS_ONLY = ("course_lib.mesh",)
+#: modules whose students' copy is generated when the wheel is built: the text their
+#: ``students_copy()`` returns (e.g. the results of the references on a figure's fixed inputs)
+GENERATED_MODULES = ("course_lib._mc_results_data",)
 #: the instructors' requirements a student's environment needs (versions come from our own
 #: package metadata, so the two never disagree)
 STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "anywidget", "jupyterlab",
@@ -100,6 +111,11 @@ def library_files() -> list[Path]:
                   if "__pycache__" not in p.parts)
 
 
+def shipped_files() -> list[Path]:
+    """The files of :func:`library_files` the students' wheel carries (not :data:`INSTRUCTORS_ONLY`)."""
+    return [p for p in library_files() if module_name(p) not in INSTRUCTORS_ONLY]
+
+
 def module_name(path: Path) -> str:
     """``course_lib/plots/clipping.py`` -> ``course_lib.plots.clipping``."""
     return ".".join(Path(path).with_suffix("").parts)
@@ -107,7 +123,7 @@ def module_name(path: Path) -> str:
 
 def compiled_modules() -> list[str]:
     """Dotted names of the modules the wheel carries only as compiled extensions."""
-    return [module_name(p) for p in library_files()
+    return [module_name(p) for p in shipped_files()
             if p.name != "__init__.py" and module_name(p) not in SHIPPED_AS_SOURCE]
 
 
@@ -160,6 +176,35 @@ def without_functions(text: str, names) -> str:
     still = sorted(names & names_used(out))
     if still:
         raise ValueError(f"{still} left out but still named in the module")
+    return out
+
+
+def left_out() -> dict[str, tuple[str, ...]]:
+    """``{module: (function, ...)}``: what staging removes, the graded functions of
+    :func:`withheld_functions` and their :data:`LEFT_OUT_HELPERS`."""
+    out = {m: set(names) for m, names in withheld_functions().items()}
+    for m, names in LEFT_OUT_HELPERS.items():
+        if m in out:          # the helpers go with the module's graded functions
+            out[m].update(names)
+    return {m: tuple(sorted(names)) for m, names in sorted(out.items())}
+
+
+def imported_modules(text: str, module: str) -> set[str]:
+    """Dotted names of the modules (and of the names in them) that ``module``'s source imports,
+    relative imports resolved."""
+    package = module.rpartition(".")[0]
+    out = set()
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, ast.Import):
+            out.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")
+                parts = parts[:len(parts) - node.level + 1]
+                base = ".".join(parts + ([node.module] if node.module else []))
+            out.add(base)
+            out.update(f"{base}.{alias.name}" for alias in node.names)
     return out
 
 
@@ -228,11 +273,17 @@ def sources_digest() -> str:
     for rel in library_files():
         h.update(str(rel).encode() + b"\0" + (REPO_ROOT / rel).read_bytes() + b"\0")
     h.update(SETUP_SCRIPT.read_bytes())
-    h.update(json.dumps([course_version(), bundle_spec(), withheld_functions(),
+    h.update(json.dumps([course_version(), bundle_spec(), left_out(), INSTRUCTORS_ONLY,
+                         GENERATED_MODULES, np_version(),
                          student_jupyter_config(),
                          pyproject_text("0"), student_readme(),
                          sys.version, sysconfig.get_platform()]).encode())
     return h.hexdigest()
+
+
+def np_version() -> str:
+    """NumPy's version: the generated modules hold arrays it computed."""
+    return importlib.metadata.version("numpy")
 
 
 def wheel_version(digest: str) -> str:
@@ -260,18 +311,39 @@ def pyproject_text(version: str) -> str:
     )
 
 
+def staged_text(rel: Path, withheld: dict, gone: set) -> str:
+    """The students' copy of the library file ``rel``: generated (:data:`GENERATED_MODULES`),
+    without its left-out functions, or as it is; ``ValueError`` when it would still name a
+    function left out elsewhere or import an :data:`INSTRUCTORS_ONLY` module."""
+    import importlib
+
+    name = module_name(rel)
+    if name in GENERATED_MODULES:
+        text = importlib.import_module(name).students_copy()
+    else:
+        text = (REPO_ROOT / rel).read_text(encoding="utf-8")
+    if name in withheld:
+        text = without_functions(text, withheld[name])
+    # a left-out function that shares its name with a module of the library (marching_cubes)
+    # cannot be told from an import of that module by name: the wheel probe checks those
+    modules = {module_name(p).rpartition(".")[2] for p in library_files()}
+    named = (gone - modules) & names_used(text)
+    if named:   # e.g. a re-export of a function left out elsewhere
+        raise ValueError(f"{rel} names {sorted(named)}, which the students' wheel leaves out")
+    imported = sorted(m for m in imported_modules(text, name)
+                      if any(m == o or m.startswith(o + ".") for o in INSTRUCTORS_ONLY))
+    if imported:
+        raise ValueError(f"{rel} imports {imported}, which the students' wheel leaves out")
+    return text
+
+
 def stage_sources(stage: Path, digest: str) -> Path:
     """Fill ``stage`` with what ``pip wheel`` builds from: the library, setup, metadata."""
-    withheld = withheld_functions()
+    withheld = left_out()
     gone = {name for names in withheld.values() for name in names}
-    for rel in library_files():
+    for rel in shipped_files():
         (stage / rel).parent.mkdir(parents=True, exist_ok=True)
-        text = (REPO_ROOT / rel).read_text(encoding="utf-8")
-        if module_name(rel) in withheld:
-            text = without_functions(text, withheld[module_name(rel)])
-        elif gone & names_used(text):   # e.g. a re-export of a function left out elsewhere
-            raise ValueError(f"{rel} names {sorted(gone & names_used(text))}, which the "
-                             "students' wheel leaves out")
+        text = staged_text(rel, withheld, gone)
         (stage / rel).write_text(text, encoding="utf-8")
     shutil.copyfile(SETUP_SCRIPT, stage / "setup.py")
     (stage / "bundle.json").write_text(json.dumps(bundle_spec(), indent=1))
@@ -300,6 +372,8 @@ def wheel_problems(wheel: Path) -> list[str]:
             problems.append(f"{name}: source of a compiled module")
         if name.endswith(FORBIDDEN_SUFFIXES) or "__pycache__" in name:
             problems.append(f"{name}: source, bytecode or notebook")
+        if any(name.startswith(m.replace(".", "/") + ".") for m in INSTRUCTORS_ONLY):
+            problems.append(f"{name}: a module the students' wheel leaves out")
     missing = [m for m in compiled
                if not any(n.startswith(m.replace(".", "/") + ".") and n.endswith(".so")
                           for n in names)]

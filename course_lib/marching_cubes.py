@@ -31,10 +31,20 @@ here; every mesh built from :data:`TRI_TABLE` is watertight, and mixing it with
 :data:`ALT_TRI_TABLE` opens the holes of Q3(c). Their faces are wound so that normals point up
 the gradient of the data, away from the inside: a blob of low values gets a positive enclosed
 volume from :func:`course_lib.mesh.mesh_volume` (Q3(d)).
+
+The students' copy
+------------------
+Students' wheel holds the tables, the symmetry classes and :func:`closes_up` (the visible test
+of Q3(c)), not the graded functions nor anything that marches a volume (:func:`cube_index`,
+:func:`interpolate_edge`, :func:`marching_cubes`, :func:`marching_cubes_loop`,
+:func:`cell_triangles`, :func:`hole_demo`, :func:`probe_triangulation`); its figures read the
+references' results on their fixed inputs from :mod:`course_lib.mc_results`
+(docs/students-copy.md).
 """
 
 from __future__ import annotations
 
+import collections
 import functools
 import itertools
 from dataclasses import dataclass
@@ -61,6 +71,7 @@ __all__ = [
     "case_of",
     "case_triangles",
     "cell_triangles",
+    "closes_up",
     "count_symmetry_classes",
     "cube_index",
     "cube_symmetries",
@@ -704,8 +715,9 @@ def cell_triangles(values, iso, alternative: bool = False) -> np.ndarray:
 
     ``values`` are the eight corner values (corner order of this module); the case comes from
     :func:`cube_index`, the triangles from :data:`TRI_TABLE` (or :data:`ALT_TRI_TABLE`), and
-    each vertex is interpolated along its edge (:func:`interpolate_edge`). Used by the figures
-    and the case explorer.
+    each vertex is interpolated along its edge (:func:`interpolate_edge`). The tests check the
+    case figures' own triangles (:func:`course_lib.plots.marching_cubes.drawn_triangles`) against
+    it; like the march, it is not in the students' copy.
     """
     values = as_vectors(values, 8, "values")
     if values.shape != (8,):
@@ -830,15 +842,7 @@ def probe_triangulation(index, triangles):
         edges the case crosses.
     """
     index = _case_index(index)
-    triangles = np.asarray(triangles)
-    if triangles.size == 0:
-        triangles = triangles.reshape(0, 3)
-    if triangles.ndim != 2 or triangles.shape[1] != 3 or triangles.dtype.kind not in "iu":
-        raise ValueError(f"triangles must be integer edge numbers of shape (t, 3), got "
-                         f"{triangles.dtype} of shape {triangles.shape}")
-    if triangles.size and (triangles.min() < 0 or triangles.max() > 11
-                           or not np.all((EDGE_TABLE[index] >> triangles) & 1)):
-        raise ValueError(f"triangles must use only the edges case {index} crosses")
+    triangles = _probe_triangles(index, triangles)
     volume = np.ones((4, 4, 4))
     for c in range(8):
         if (index >> c) & 1:
@@ -850,6 +854,67 @@ def probe_triangulation(index, triangles):
         return ALT_TRI_TABLE[case, :ALT_N_TRIANGLES[case]]
 
     return _march_loop(volume, 0.5, np.ones(3), triangles_of_cell)
+
+
+def _probe_triangles(index: int, triangles) -> np.ndarray:
+    """``triangles`` checked as ``(t, 3)`` numbers of edges case ``index`` crosses."""
+    triangles = np.asarray(triangles)
+    if triangles.size == 0:
+        triangles = triangles.reshape(0, 3)
+    if triangles.ndim != 2 or triangles.shape[1] != 3 or triangles.dtype.kind not in "iu":
+        raise ValueError(f"triangles must be integer edge numbers of shape (t, 3), got "
+                         f"{triangles.dtype} of shape {triangles.shape}")
+    if triangles.size and (triangles.min() < 0 or triangles.max() > 11
+                           or not np.all((EDGE_TABLE[index] >> triangles) & 1)):
+        raise ValueError(f"triangles must use only the edges case {index} crosses")
+    return triangles
+
+
+def closes_up(index, triangles) -> bool:
+    """Does case ``index``, triangulated with ``triangles``, close up among joining neighbours?
+
+    Q3(c): the cell of :func:`probe_triangulation` (its corners those of case ``index``, in a
+    block of outside samples whose other cells all join the inside corners on their ambiguous
+    faces) is triangulated with ``triangles``. True when the surface is then closed and
+    consistently wound: every edge between two crossing points is used by exactly two
+    triangles, in opposite directions, and no triangle repeats a crossing point. Only which
+    grid edges the triangles join matters here, not where on them the vertices sit.
+
+    Parameters
+    ----------
+    index : int
+        The central cell's case number, 0 ... 255.
+    triangles : array_like of int, shape (t, 3)
+        Cube-edge numbers 0 ... 11 of edges the case crosses.
+
+    Raises
+    ------
+    ValueError
+        As :func:`probe_triangulation`.
+
+    Examples
+    --------
+    >>> closes_up(5, ALT_TRI_TABLE[5, :ALT_N_TRIANGLES[5]])      # the joined band
+    True
+    >>> closes_up(5, TRI_TABLE[5, :N_TRIANGLES[5]])              # kept apart: a hole each side
+    False
+    """
+    index = _case_index(index)
+    triangles = _probe_triangles(index, triangles)
+    inside = {tuple(1 + CORNERS[c]) for c in range(8) if (index >> c) & 1}
+    directed = collections.Counter()
+    for cell in itertools.product(range(3), repeat=3):
+        corners = [tuple(np.add(cell, p)) for p in CORNERS]
+        case = sum(1 << c for c, p in enumerate(corners) if p in inside)
+        rows = (triangles if cell == (1, 1, 1)
+                else ALT_TRI_TABLE[case, :ALT_N_TRIANGLES[case]])
+        for tri in rows.tolist():
+            # a crossing point is its grid edge: the edge's first sample and its axis
+            keys = [(corners[EDGES[e, 0]], int(_EDGE_AXIS[e])) for e in tri]
+            if len(set(keys)) < 3:
+                return False
+            directed.update(zip(keys, keys[1:] + keys[:1]))
+    return all(n == 1 and directed.get((v, u)) == 1 for (u, v), n in directed.items())
 
 
 # --------------------------------------------------------------------------------------------

@@ -9,6 +9,9 @@ equation (4) of the solutions,
 
 Summed over a closed, consistently wound surface, the prisms under the near side cancel those
 under the far side and what is left is the enclosed volume; the choice of ``n`` does not matter.
+
+Instructors only: the students' wheel does not carry this module (its figures read the volumes
+the references computed, :mod:`course_lib.mc_results`).
 """
 
 from __future__ import annotations

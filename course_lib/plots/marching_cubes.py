@@ -4,6 +4,13 @@ sphere and the projected prism of equation (4).
 Every function takes an optional ``ax`` (a 3-D axes where the figure is 3-D) and returns the
 artists it drew, so that the case explorer (:mod:`course_lib.widgets.marching_cubes`) can update
 them in place with ``set_verts`` and ``set_data_3d``.
+
+Nothing here runs the graded maths (the students' copy of the library has none of it): a cell
+of the case figures has corner values 0 (inside) and 1 (outside), so its triangles are the rows
+of :data:`~course_lib.marching_cubes.TRI_TABLE` with each vertex at the fraction ``iso`` of its
+edge from the inside corner (:func:`drawn_triangles`, drawn to display precision); the sphere
+and the hole are meshes the course's references made when the library was built
+(:mod:`course_lib.mc_results`).
 """
 
 from __future__ import annotations
@@ -13,7 +20,7 @@ import numpy as np
 from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 
 from .. import marching_cubes as mc
-from .. import mesh
+from .. import mc_results
 from ..plotting import COLOURS
 from .describe import num, set_summary
 
@@ -21,6 +28,7 @@ __all__ = [
     "case_values",
     "draw_case",
     "draw_cube",
+    "drawn_triangles",
     "new_3d_axes",
     "plot_ambiguous_cases",
     "plot_ambiguous_face",
@@ -35,6 +43,9 @@ __all__ = [
 SURFACE = "#4c9be8"
 INSIDE = COLOURS["highlight"]
 OUTSIDE = "white"
+#: decimals of the drawn case triangles: display precision (1e-4 of the unit cell), far finer
+#: than a pixel; the explorer's iso-levels (steps of 0.01) are drawn exactly
+DISPLAY_DECIMALS = 4
 
 
 def new_3d_axes(ax=None, size=4.0):
@@ -81,8 +92,32 @@ def draw_cube(ax, labels: bool = False):
     return art
 
 
+def drawn_triangles(index: int, iso: float = 0.5, alternative: bool = False) -> np.ndarray:
+    """The triangles drawn for case ``index`` at level ``iso``, shape ``(t, 3, 3)``.
+
+    The corners of the drawn cell hold 0 (inside) and 1 (outside), so each vertex sits at the
+    fraction ``iso`` of its edge from the inside corner (Q3(a)); the edges are the case's row of
+    :data:`~course_lib.marching_cubes.TRI_TABLE` (with ``alternative``, of
+    :data:`~course_lib.marching_cubes.ALT_TRI_TABLE`, Q3(c)). Coordinates are rounded to
+    :data:`DISPLAY_DECIMALS`.
+    """
+    index = int(index)
+    if not 0 <= index <= 255:
+        raise ValueError(f"index must be a case number from 0 to 255, got {index}")
+    iso = float(iso)
+    if not 0.0 < iso < 1.0:
+        raise ValueError(f"iso must lie strictly between 0 and 1, got {iso}")
+    table, ntri = ((mc.ALT_TRI_TABLE, mc.ALT_N_TRIANGLES) if alternative
+                   else (mc.TRI_TABLE, mc.N_TRIANGLES))
+    edges = table[index, :ntri[index]]                                  # (t, 3)
+    a, b = mc.EDGES[edges, 0], mc.EDGES[edges, 1]
+    t = np.where((index >> a) & 1, iso, 1.0 - iso)          # from a: iso if a is inside
+    tris = mc.CORNERS[a] + t[..., None] * (mc.CORNERS[b] - mc.CORNERS[a])
+    return np.round(tris, DISPLAY_DECIMALS) + 0.0
+
+
 def draw_case(index: int, ax=None, alternative: bool = False, iso: float = 0.5,
-              values=None, title: str | None = None):
+              title: str | None = None):
     """One cell of case ``index``: cube, inside (red) / outside (white) corners, triangles.
 
     Returns a dict with ``"surface"`` (a ``Poly3DCollection``), ``"corners"`` (eight ``Line3D``
@@ -94,22 +129,21 @@ def draw_case(index: int, ax=None, alternative: bool = False, iso: float = 0.5,
         [], facecolor=SURFACE, edgecolor="k", linewidths=0.6, alpha=0.85))
     art["corners"] = [ax.plot(*p[:, None].astype(float), "o", ms=7, mec="k")[0]
                       for p in mc.CORNERS]
-    update_case(art, index, alternative=alternative, iso=iso, values=values)
+    update_case(art, index, alternative=alternative, iso=iso)
     _tidy(ax, title=title)
     return art
 
 
-def update_case(art, index: int, alternative: bool = False, iso: float = 0.5, values=None):
+def update_case(art, index: int, alternative: bool = False, iso: float = 0.5):
     """Move the artists of :func:`draw_case` to case ``index`` (no re-plotting).
 
-    Returns the triangles drawn, shape ``(t, 3, 3)``.
+    Returns the triangles drawn, shape ``(t, 3, 3)`` (:func:`drawn_triangles`).
     """
-    vals = case_values(index) if values is None else np.asarray(values, float)
-    tris = mc.cell_triangles(vals, iso, alternative=alternative)
+    tris = drawn_triangles(index, iso, alternative=alternative)
     art["surface"].set_verts(list(tris))
+    inside = [c for c in range(8) if (int(index) >> c) & 1]
     for c, line in enumerate(art["corners"]):
-        line.set_markerfacecolor(INSIDE if vals[c] < iso else OUTSIDE)
-    inside = [c for c in range(8) if vals[c] < iso]
+        line.set_markerfacecolor(INSIDE if c in inside else OUTSIDE)
     set_summary(art["corners"][0].axes,
                 f"Inside corners (filled): {', '.join(map(str, inside)) or 'none'}; "
                 f"{len(tris)} triangle{'s' if len(tris) != 1 else ''} at iso-level {num(iso)}.")
@@ -199,7 +233,7 @@ def plot_hole(ax=None):
     the four edges that only one side uses (red) bound the hole.
     """
     ax = new_3d_axes(ax, size=5)
-    _, verts, faces = mc.hole_demo()
+    verts, faces, holes = mc_results.hole_mesh()
     centroid = verts[faces].mean(axis=1)
     in_pair = np.all((centroid > [1, 1, 1]) & (centroid < [3, 2, 2]), axis=1)
     left = in_pair & (centroid[:, 0] < 2)
@@ -211,7 +245,6 @@ def plot_hole(ax=None):
                                                       facecolor=COLOURS["received"],
                                                       edgecolor="k", linewidths=0.6, alpha=0.8)),
     }
-    holes = mesh.boundary_edges(faces)
     art["hole"] = ax.add_collection3d(Line3DCollection(verts[holes], colors=INSIDE, linewidths=3))
     cell = mc.CORNERS.astype(float) + 1.0
     art["cells"] = [ax.add_collection3d(Line3DCollection((cell + [dx, 0, 0])[mc.EDGES],
@@ -231,19 +264,18 @@ def plot_hole(ax=None):
     return art
 
 
-def plot_sphere_mesh(ax=None, n: int = 12, radius: float = 4.2):
-    """A sphere sampled on an ``n**3`` grid and triangulated by :func:`marching_cubes`."""
+def plot_sphere_mesh(ax=None):
+    """The sphere of :data:`course_lib.mc_results.SPHERE_FIGURE` (radius 4.2 sampled on a
+    12**3 grid) as the course's marching cubes triangulates it, with its volume by equation (4)."""
     ax = new_3d_axes(ax, size=5)
-    c = (n - 1) / 2 + 0.1
-    vol = mc.sphere_field((n, n, n), (c, c, c))
-    verts, faces = mc.marching_cubes(vol, radius ** 2)
+    n, radius = mc_results.SPHERE_FIGURE["n"], mc_results.SPHERE_FIGURE["radius"]
+    verts, faces, v = mc_results.sphere_mesh()
     poly = ax.add_collection3d(Poly3DCollection(verts[faces], facecolor=SURFACE,
                                                 edgecolor="k", linewidths=0.3, alpha=0.9))
     ax.set_xlim(0, n - 1)
     ax.set_ylim(0, n - 1)
     ax.set_zlim(0, n - 1)
     ax.set_box_aspect((1, 1, 1))
-    v = mesh.mesh_volume(verts, faces)
     ax.set_title(f"{len(faces)} triangles; volume {v:.1f} vs 4/3 pi r^3 = "
                  f"{mc.sphere_volume(radius):.1f}", fontsize=9)
     return {"surface": poly, "verts": verts, "faces": faces}
@@ -272,7 +304,7 @@ def plot_projected_prism(ax=None, a=(0.2, 0.1, 1.2), b=(1.0, 0.3, 1.7), c=(0.5, 
     ax.quiver(1.2, 1.2, 0, 0, 0, 0.5, color="k", arrow_length_ratio=0.2)
     ax.text(1.22, 1.2, 0.55, "n", fontsize=12)
     A = 0.5 * np.cross(tri[1] - tri[0], tri[2] - tri[0])[2]
-    V = mesh.triangle_projected_volume(*tri, (0, 0, 1))
+    V = A * g[2]                                         # the title's own product, to 3 decimals
     ax.set_xlim(0, 1.3)
     ax.set_ylim(0, 1.3)
     ax.set_zlim(0, 1.8)

@@ -699,3 +699,38 @@ def test_joined_patch_rule_rejects_a_triangle_flat_in_a_face():
     flat = expected.copy()
     flat[0] = (0, 1, 2)                                  # three crossings of the bottom face
     assert "flat" in same_joined_patch(expected, flat)
+
+
+def _candidate_triangulations(index, rng):
+    """The table's row, the joined row, the joined row reversed, and random triangles of the
+    crossed edges (mostly not closing up)."""
+    alt = mc.ALT_TRI_TABLE[index, :mc.ALT_N_TRIANGLES[index]]
+    out = [alt, mc.TRI_TABLE[index, :mc.N_TRIANGLES[index]], alt[:, ::-1], alt[:-1]]
+    crossed = [e for e in range(12) if (int(mc.EDGE_TABLE[index]) >> e) & 1]
+    if crossed:
+        out += [rng.choice(crossed, size=(max(len(alt), 1), 3)) for _ in range(3)]
+    return [np.asarray(t, dtype=np.int64).reshape(-1, 3) for t in out]
+
+
+def test_closes_up_is_the_probe_meshs_closedness():
+    """``closes_up`` (in the students' copy: no march, no vertex positions) agrees with the
+    probe mesh that the references march, judged by ``is_closed_consistent``, on every case;
+    the joined row closes up (trimesh agrees), the table's row does not where a face is ambiguous."""
+    rng = np.random.default_rng(2006)
+    verdicts = []
+    for index in range(256):
+        for tris in _candidate_triangulations(index, rng):
+            want = mesh.is_closed_consistent(mc.probe_triangulation(index, tris)[1])
+            assert mc.closes_up(index, tris) == want, (index, tris.tolist())
+            verdicts.append(want)
+    assert 0 < sum(verdicts) < len(verdicts)
+    for index in AMBIGUOUS[:12]:
+        alt = mc.alternative_triangulation(index)
+        assert mc.closes_up(index, alt) and _probe_trimesh(index, alt).is_watertight
+        assert not mc.closes_up(index, mc.TRI_TABLE[index, :mc.N_TRIANGLES[index]])
+
+
+def test_closes_up_refuses_bad_arguments():
+    for index, tris in ((256, [[0, 1, 2]]), (5, [[0, 1]]), (5, [[0, 1, 4]]), (5, [[0.0, 1, 2]])):
+        with pytest.raises(ValueError):
+            mc.closes_up(index, tris)

@@ -39,6 +39,8 @@ def _fit_members() -> list[str]:
                f"{DATA}/labconfig/page_config.d/4f9-student.json",
                f"{DATA}/jupyter_server_config.d/zz-4f9-student.json"]
     for module in _library_modules():
+        if module.replace("/", ".") in student_bundle.INSTRUCTORS_ONLY:
+            continue
         readable = module.endswith("__init__") or module == "course_lib/answers"
         members.append(module + (".py" if readable else SO))
     return members
@@ -66,9 +68,18 @@ def test_guard_names_each_leak(tmp_path, extra, complaint):
 
 
 def test_guard_names_a_module_left_uncompiled(tmp_path):
-    members = [m for m in _fit_members() if not m.startswith("course_lib/mesh.")]
+    members = [m for m in _fit_members() if not m.startswith("course_lib/clipping.")]
     problems = student_bundle.wheel_problems(_forge(tmp_path / "short.whl", members))
-    assert problems == ["course_lib.mesh: no compiled extension in the wheel"]
+    assert problems == ["course_lib.clipping: no compiled extension in the wheel"]
+
+
+def test_guard_names_a_module_the_wheel_leaves_out(tmp_path):
+    """``course_lib.mesh`` (the volume of Q3(d)) is instructors-only: in any form, it is a leak."""
+    assert "course_lib.mesh" in student_bundle.INSTRUCTORS_ONLY
+    for member in ("course_lib/mesh" + SO, "course_lib/mesh.py"):
+        problems = student_bundle.wheel_problems(_forge(tmp_path / "extra.whl",
+                                                        _fit_members() + [member]))
+        assert f"{member}: a module the students' wheel leaves out" in problems, problems
 
 
 @pytest.mark.skipif(sys.version_info < (3, 11), reason="tomllib")
@@ -116,7 +127,9 @@ def test_staged_library_imports_without_the_left_out_functions(tmp_path):
     import subprocess
 
     stage = student_bundle.stage_sources(tmp_path, "0" * 64)
-    withheld = student_bundle.withheld_functions()
+    withheld = student_bundle.left_out()          # graded functions and their helpers
+    assert "marching_cubes_loop" in withheld["course_lib.marching_cubes"]
+    assert not (stage / "course_lib" / "mesh.py").exists()
     code = ("import importlib, json, pkgutil, sys, course_lib\n"
             "assert course_lib.__file__.startswith(sys.argv[1]), course_lib.__file__\n"
             "mods = [m.name for m in pkgutil.walk_packages(course_lib.__path__, 'course_lib.')]\n"
@@ -136,4 +149,12 @@ def test_staging_refuses_a_module_that_uses_a_function_left_out_elsewhere(tmp_pa
     monkeypatch.setattr(student_bundle, "withheld_functions",
                         lambda: {"course_lib.gamma_camera": ("collimator_resolution",)})
     with pytest.raises(ValueError, match=r"gamma_camera\.py names \['collimator_resolution'\]"):
+        student_bundle.stage_sources(tmp_path, "0" * 64)
+
+
+def test_staging_refuses_a_module_that_imports_an_instructors_only_module(tmp_path, monkeypatch):
+    """Were the tables instructors-only, the march's module (which imports them) could not ship:
+    the build names it instead of shipping a module that fails to import."""
+    monkeypatch.setattr(student_bundle, "INSTRUCTORS_ONLY", ("course_lib._mc_tables",))
+    with pytest.raises(ValueError, match=r"marching_cubes\.py imports \['course_lib\._mc_tables"):
         student_bundle.stage_sources(tmp_path, "0" * 64)

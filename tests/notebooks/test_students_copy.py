@@ -109,3 +109,65 @@ def test_students_wheel_answers_only_what_its_explorers_still_need(wheel_answers
                    "explorers and figures compute with: docs/students-copy.md, 'Not done yet'")
 def test_students_wheel_answers_no_graded_function(wheel_answers):
     assert wheel_answers["answers"] == {}, wheelprobe.summary(wheel_answers)
+
+
+Q3_IN_STUDENT_ENV = r'''
+import pickle, sys
+import numpy as np
+from course_lib import marching_cubes, mc_results
+from course_lib._mc_results_data import load
+from course_lib.plots.marching_cubes import case_values, drawn_triangles
+from course_lib.widgets.marching_cubes import CaseExplorer
+try:
+    import course_lib.mesh
+    mesh = "importable"
+except ImportError:
+    mesh = "absent"
+gone = [n for n in ("cube_index", "interpolate_edge", "marching_cubes", "marching_cubes_loop",
+                    "cell_triangles", "hole_demo", "probe_triangulation") if hasattr(marching_cubes, n)]
+drawn = {(i, iso, alt): drawn_triangles(i, iso, alt) for i in range(256) for iso in (0.13, 0.5, 0.98)
+         for alt in (False, True) if not alt or marching_cubes.ambiguous_faces(i)}
+ex = CaseExplorer(index=165, iso=0.31)
+ex.alternative.value = True
+alt5 = marching_cubes.ALT_TRI_TABLE[5, :marching_cubes.ALT_N_TRIANGLES[5]]
+with open(sys.argv[1], "wb") as f:
+    pickle.dump({"data": dict(load()), "drawn": drawn, "explorer": ex.triangles, "mesh": mesh,
+                 "gone": gone, "closes": [marching_cubes.closes_up(5, alt5),
+                                          marching_cubes.closes_up(5, alt5[:, ::-1])],
+                 "convergence": mc_results.sphere_convergence()}, f)
+'''
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("student_env")
+def test_students_q3_figures_are_the_instructors(tmp_path):
+    """In the students' environment: q3's shipped results are the references' bit for bit, the
+    case figures and explorer draw the references' triangles (to display precision, 1e-4),
+    ``closes_up`` works, and the march, the graded functions and ``course_lib.mesh`` are absent."""
+    if shutil.which("gcc") is None:
+        pytest.skip("no C compiler (make wheel-deps)")
+    import pickle
+
+    import numpy as np
+    import studentenv
+
+    from course_lib import _mc_results_data
+    from course_lib import marching_cubes as mc
+    from course_lib.plots.marching_cubes import case_values
+
+    out = tmp_path / "q3.pkl"
+    proc = studentenv.run(Q3_IN_STUDENT_ENV, str(out), cwd=tmp_path, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    got = pickle.loads(out.read_bytes())
+    assert got["mesh"] == "absent" and got["gone"] == []
+    assert got["closes"] == [True, False]
+    ref = _mc_results_data.compute()
+    assert sorted(got["data"]) == sorted(ref)
+    for name, array in ref.items():
+        np.testing.assert_array_equal(got["data"][name], array, err_msg=name)
+    assert [r["triangles"] for r in got["convergence"]] == ref["convergence"][:, 1].astype(int).tolist()
+    for (index, iso, alt), tris in got["drawn"].items():
+        want = mc.cell_triangles(case_values(index), iso, alternative=alt)
+        np.testing.assert_allclose(tris, want, rtol=0, atol=0.5e-4, err_msg=str((index, iso, alt)))
+    np.testing.assert_allclose(got["explorer"], mc.cell_triangles(case_values(165), 0.31, True),
+                               rtol=0, atol=0.5e-4)

@@ -182,8 +182,70 @@ def test_other_figures_draw():
     assert len(ax["corner_labels"]) == 8 and len(ax["edge_labels"]) == 12
     lines = plots.plot_ambiguous_face()
     assert len(lines) == 4
-    art = plots.plot_sphere_mesh(n=10, radius=3.3)
+    art = plots.plot_sphere_mesh()
     assert mesh.is_closed_consistent(art["faces"])
     _fig, arts = plots.plot_ambiguous_cases()
     assert len(arts) == 12
+    plt.close("all")
+
+
+# --------------------------------------------------------------------------------------------
+# what the figures draw without the graded maths (the students' copy has none of it)
+
+
+@pytest.mark.parametrize("alternative", [False, True])
+def test_drawn_triangles_are_the_references_at_display_precision(alternative):
+    """Every case at iso-levels across the explorer's slider: the drawn triangles are those of
+    the instructors' :func:`~course_lib.marching_cubes.cell_triangles` (the table's rows,
+    vertices interpolated by the reference) within the display precision, 1e-4."""
+    for index in range(256):
+        if alternative and not mc.ambiguous_faces(index):
+            continue
+        for iso in (0.02, 0.13, 0.37, 0.5, 0.81, 0.98):
+            got = plots.drawn_triangles(index, iso, alternative=alternative)
+            want = mc.cell_triangles(plots.case_values(index), iso, alternative=alternative)
+            assert got.shape == want.shape, (index, iso)
+            np.testing.assert_allclose(got, want, rtol=0, atol=0.5e-4, err_msg=str((index, iso)))
+
+
+def test_drawn_triangles_refuse_bad_arguments():
+    for index, iso in ((256, 0.5), (-1, 0.5), (3, 0.0), (3, 1.0)):
+        with pytest.raises(ValueError):
+            plots.drawn_triangles(index, iso)
+
+
+def _pixels(fig):
+    fig.canvas.draw()
+    return np.asarray(fig.canvas.buffer_rgba()).copy()
+
+
+@pytest.mark.parametrize("index, iso, alternative", [(1, 0.5, False), (165, 0.3, False),
+                                                     (165, 0.74, True), (26, 0.61, False)])
+def test_explorer_renders_the_references_figure(index, iso, alternative):
+    """The explorer's figure, pixel for pixel, is the one drawn from the reference's triangles."""
+    e = CaseExplorer(index=index, iso=iso)
+    e.alternative.value = alternative
+    ours = _pixels(e.fig)
+    want = mc.cell_triangles(plots.case_values(index), iso, alternative=alternative)
+    e.art["surface"].set_verts(list(want))
+    assert np.array_equal(_pixels(e.fig), ours)
+    plt.close(e.fig)
+
+
+def test_sphere_and_hole_figures_show_the_references_meshes():
+    """The sphere and the hole are the meshes the instructors' marching cubes makes of the same
+    volumes (their numbers shipped in the students' copy, :mod:`course_lib.mc_results`)."""
+    art = plots.plot_sphere_mesh()
+    n, r = 12, 4.2
+    c = (n - 1) / 2 + 0.1
+    verts, faces = mc.marching_cubes(mc.sphere_field((n, n, n), (c, c, c)), r ** 2)
+    np.testing.assert_array_equal(mesh.canonical_triangles(art["verts"], art["faces"]),
+                                  mesh.canonical_triangles(verts, faces))
+    title = art["surface"].axes.get_title()
+    assert f"{len(faces)} triangles; volume {mesh.mesh_volume(verts, faces):.1f}" in title
+    plt.close("all")
+    art = plots.plot_hole()
+    _, verts, faces = mc.hole_demo()
+    drawn_hole = np.asarray(art["hole"]._segments3d, float)
+    np.testing.assert_array_equal(drawn_hole, verts[mesh.boundary_edges(faces)])
     plt.close("all")
