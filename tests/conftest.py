@@ -29,17 +29,19 @@ import pytest
 
 #: run at the start of every Python process the tests launch, and of this one (see its docstring)
 STARTUP = Path(__file__).resolve().parent / "startup"
+REPO_ROOT = Path(__file__).resolve().parents[1]
 os.environ["PYTHONPATH"] = os.pathsep.join(
     p for p in (str(STARTUP), os.environ.get("PYTHONPATH", "")) if p)
 _spec = importlib.util.spec_from_file_location("_tests_startup", STARTUP / "sitecustomize.py")
 _spec.loader.exec_module(importlib.util.module_from_spec(_spec))
 
 os.environ["MPLBACKEND"] = "Agg"
+#: a fresh course root's release and gradebook (nbgrader's generate_assignment, about 400 SQLite
+#: commits) are copied from here after the first (autograder/release_cache.py)
+os.environ.setdefault("AUTOGRADER_COURSE_CACHE", str(REPO_ROOT / ".cache" / "course-release"))
 os.environ.setdefault("JUPYTERHUB_USER", "ci-student")
 #: the student id every notebook run by the tests works as (see course_lib.variants)
 CI_STUDENT = os.environ["JUPYTERHUB_USER"]
-
-REPO_ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="session")
