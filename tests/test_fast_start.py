@@ -11,8 +11,9 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
-from conftest import REPO_ROOT
+REPO_ROOT = Path(__file__).resolve().parents[1]
 
 IRIS = ["http://example.com/a?b=c#d", "https://例え.jp/パス", "urn:isbn:0451450523",
         "http://exa mple.com", "no scheme", "http://[::1]:80/", "mailto:kim@cam.ac.uk", ""]

@@ -32,7 +32,7 @@ from gradingtools import (expect_all, expect_full_marks, points_of,
 
 from autograder.exercises import REGISTRY
 
-pytestmark = [pytest.mark.xdist_group("grading")]
+pytestmark = [pytest.mark.xdist_group("bank")]
 
 #: ``GRADING_BANK_NOTEBOOKS=q1_imaging,q5_phong`` limits the bank while developing.
 _ONLY = [n for n in os.environ.get("GRADING_BANK_NOTEBOOKS", "").split(",") if n]

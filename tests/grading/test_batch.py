@@ -22,7 +22,7 @@ from autograder.exercises import REGISTRY
 from gradingtools import (SECRET, cell_index, model_version, read_grades, release_version,
                           run_grade, write_nb)
 
-pytestmark = [pytest.mark.xdist_group("grading"), pytest.mark.slow]
+pytestmark = [pytest.mark.xdist_group("batch"), pytest.mark.slow]
 
 N_STUDENTS = 24
 KINDS = ("model", "wrong", "stub", "deleted")
