@@ -8,6 +8,7 @@ the smallest source notebook, as ``test_course.py`` does.
 from __future__ import annotations
 
 import json
+import shutil
 
 import pytest
 
@@ -18,6 +19,32 @@ from autograder.course import ASSIGNMENT, prepare_course, source_notebooks
 NOTEBOOKS = source_notebooks()
 pytestmark = [pytest.mark.skipif(not NOTEBOOKS, reason="no notebooks/q*.ipynb yet"),
               pytest.mark.timeout(300)]
+
+
+SRC = min(NOTEBOOKS, key=lambda p: p.stat().st_size) if NOTEBOOKS else None
+
+
+class WouldRunNbgrader(Exception):
+    """Raised instead of running nbgrader where a test expects nbgrader to be asked."""
+
+
+@pytest.fixture(scope="module")
+def kept(tmp_path_factory):
+    """A cache holding one entry (``SRC`` prepared once, by nbgrader) and that course."""
+    root = tmp_path_factory.mktemp("kept")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv(release_cache.ENV, str(root / "cache"))
+        course = prepare_course(root / "first", notebooks=[SRC])
+    return root / "cache", course
+
+
+@pytest.fixture
+def cache(kept, tmp_path, monkeypatch):
+    """This test's copy of the kept cache, turned on."""
+    folder = tmp_path / "cache"
+    shutil.copytree(kept[0], folder)
+    monkeypatch.setenv(release_cache.ENV, str(folder))
+    return folder
 
 
 @pytest.fixture
@@ -32,6 +59,18 @@ def nbgrader_runs(monkeypatch):
 
     monkeypatch.setattr(course_mod, "run_nbgrader", counting)
     return runs
+
+
+def _refuse_nbgrader(monkeypatch) -> None:
+    def refuse(args, *rest, **kwargs):
+        raise WouldRunNbgrader(args)
+
+    monkeypatch.setattr(course_mod, "run_nbgrader", refuse)
+
+
+@pytest.fixture
+def no_nbgrader(monkeypatch):
+    _refuse_nbgrader(monkeypatch)
 
 
 def _cells(db_url: str) -> dict:
@@ -52,70 +91,58 @@ def _cells(db_url: str) -> dict:
         }
 
 
-def test_a_fresh_root_from_the_cache_equals_nbgrader_s_own(tmp_path, monkeypatch, nbgrader_runs):
-    src = min(NOTEBOOKS, key=lambda p: p.stat().st_size)
+def test_a_fresh_root_from_the_cache_equals_nbgrader_s_own(tmp_path, monkeypatch, kept):
     monkeypatch.delenv(release_cache.ENV, raising=False)
-    oracle = prepare_course(tmp_path / "plain", notebooks=[src])
-    assert nbgrader_runs == [["generate_assignment", ASSIGNMENT, "--force"]]
-    assert not list(tmp_path.glob("cache*"))
+    oracle = prepare_course(tmp_path / "plain", notebooks=[SRC])     # nbgrader, no cache
+    assert not (tmp_path / "cache").exists()
 
-    monkeypatch.setenv(release_cache.ENV, str(tmp_path / "cache"))
-    first = prepare_course(tmp_path / "first", notebooks=[src])      # runs nbgrader, keeps
-    assert len(nbgrader_runs) == 2
-    served = prepare_course(tmp_path / "served", notebooks=[src])    # copied from the cache
-    assert len(nbgrader_runs) == 2, "a fresh root with the same sources ran nbgrader again"
-
-    for course in (first, served):
-        assert (course.release_dir / src.name).read_bytes() == \
-            (oracle.release_dir / src.name).read_bytes()
+    monkeypatch.setenv(release_cache.ENV, str(kept[0]))
+    _refuse_nbgrader(monkeypatch)
+    served = prepare_course(tmp_path / "served", notebooks=[SRC])    # copied, nbgrader not run
+    for course in (kept[1], served):
+        assert (course.release_dir / SRC.name).read_bytes() == \
+            (oracle.release_dir / SRC.name).read_bytes()
         assert _cells(course.db_url) == _cells(oracle.db_url)
     assert len(_cells(served.db_url)) > 10
     # the stamp makes the next preparation of the served root a no-op, as after nbgrader
-    assert prepare_course(tmp_path / "served", notebooks=[src]) == served
-    assert len(nbgrader_runs) == 2
+    assert prepare_course(tmp_path / "served", notebooks=[SRC]) == served
 
 
-def test_a_tampered_entry_or_changed_source_is_not_used(tmp_path, monkeypatch, nbgrader_runs):
-    src = min(NOTEBOOKS, key=lambda p: p.stat().st_size)
-    monkeypatch.setenv(release_cache.ENV, str(tmp_path / "cache"))
-    first = prepare_course(tmp_path / "first", notebooks=[src])
-    (entry,) = [p for p in (tmp_path / "cache").iterdir() if not p.name.startswith(".")]
-    kept = entry / "release" / src.name
-    kept.write_text(kept.read_text().replace("raise NotImplementedError()", "pass", 1))
+def test_a_tampered_entry_is_replaced_not_used(tmp_path, cache, nbgrader_runs):
+    (entry,) = [p for p in cache.iterdir() if not p.name.startswith(".")]
+    kept_copy = entry / "release" / SRC.name
+    kept_copy.write_text(kept_copy.read_text().replace("raise NotImplementedError()", "pass", 1))
 
-    again = prepare_course(tmp_path / "again", notebooks=[src])
-    assert len(nbgrader_runs) == 2, "a tampered entry was used"
-    assert (again.release_dir / src.name).read_bytes() == \
-        (first.release_dir / src.name).read_bytes()
+    again = prepare_course(tmp_path / "again", notebooks=[SRC])
+    assert nbgrader_runs == [["generate_assignment", ASSIGNMENT, "--force"]], \
+        "a tampered entry was used"
+    assert "raise NotImplementedError()" in (again.release_dir / SRC.name).read_text()
     # that run kept a whole entry again, which the next fresh root is served from
-    third = prepare_course(tmp_path / "third", notebooks=[src])
-    assert len(nbgrader_runs) == 2
-    assert (third.release_dir / src.name).read_bytes() == \
-        (first.release_dir / src.name).read_bytes()
+    third = prepare_course(tmp_path / "third", notebooks=[SRC])
+    assert len(nbgrader_runs) == 1
+    assert (third.release_dir / SRC.name).read_bytes() == \
+        (again.release_dir / SRC.name).read_bytes()
 
-    changed = tmp_path / src.name
-    nb = json.loads(src.read_text())
+
+def test_another_source_is_not_served_the_kept_release(tmp_path, cache, no_nbgrader):
+    changed = tmp_path / SRC.name
+    nb = json.loads(SRC.read_text())
     nb["cells"].append({"cell_type": "markdown", "metadata": {}, "source": "One more remark."})
     changed.write_text(json.dumps(nb, indent=1))
-    other = prepare_course(tmp_path / "other", notebooks=[changed])
-    assert len(nbgrader_runs) == 3, "another source was served the first one's release"
-    assert "One more remark." in (other.release_dir / src.name).read_text()
+    with pytest.raises(WouldRunNbgrader):
+        prepare_course(tmp_path / "other", notebooks=[changed])
 
 
-def test_a_root_that_holds_a_gradebook_is_never_served(tmp_path, monkeypatch, nbgrader_runs):
-    """A course whose gradebook exists (students, marks) is prepared by nbgrader, never
-    overwritten by a copy."""
+def test_a_root_that_holds_a_gradebook_is_never_served(tmp_path, cache, no_nbgrader):
+    """A course whose gradebook exists (students, marks) goes to nbgrader, never gets a copy."""
     from nbgrader.api import Gradebook
 
-    src = min(NOTEBOOKS, key=lambda p: p.stat().st_size)
-    monkeypatch.setenv(release_cache.ENV, str(tmp_path / "cache"))
-    prepare_course(tmp_path / "first", notebooks=[src])
     root = tmp_path / "kept"
     root.mkdir()
     with Gradebook(f"sqlite:///{root / 'gradebook.db'}", course_id="4f9") as gb:
         gb.add_student("s1")
-    course = prepare_course(root, notebooks=[src])
-    assert len(nbgrader_runs) == 2
-    with course.gradebook() as gb:
+    with pytest.raises(WouldRunNbgrader):
+        prepare_course(root, notebooks=[SRC])
+    with Gradebook(f"sqlite:///{root / 'gradebook.db'}", course_id="4f9") as gb:
         assert [s.id for s in gb.students] == ["s1"]
-        assert [nb.name for nb in gb.find_assignment(ASSIGNMENT).notebooks] == [src.stem]
+    assert not (root / "release").exists()
