@@ -6,16 +6,17 @@ registers every cell of the six notebooks (about 400) in a new SQLite gradebook 
 and so one wait for the disk, each: about 8 s of CPU and as long again waiting on ``fsync``.
 Its products, the release notebooks and that gradebook before any student is added, are a pure
 function of the source notebooks, the course's configuration (its root left out), the code that
-strips explanations, and the nbgrader version.
+strips explanations, and the versions of nbgrader and of the nbconvert and nbformat that write
+the notebooks.
 
 When the environment variable ``AUTOGRADER_COURSE_CACHE`` names a folder, the first preparation
 of a fresh root keeps those products there, under a digest of everything they are computed from
 (:func:`key`), with the SHA-256 of each file; a later preparation of a fresh root with the same
 digest copies them instead of running nbgrader. A copy whose bytes do not match their recorded
 digests is ignored and removed (nbgrader runs again and keeps a new one), so a torn or
-edited entry is never used. Only a fresh
-root is served: one whose SQLite gradebook and release folder do not exist yet, so no
-student's data can be overwritten. Unset, nothing is kept and nothing changes.
+edited entry is never used. Only a fresh root is served: one whose SQLite gradebook and release
+folder do not exist yet, so no student's data can be overwritten. Unset, nothing is kept and
+nothing changes.
 """
 
 from __future__ import annotations
@@ -42,14 +43,18 @@ def cache_dir() -> Path | None:
 
 
 def key(notebooks: list[Path], config: str) -> str:
-    """A digest of what a release is computed from: the nbgrader version, the configuration
-    ``config`` (written for a placeholder root), the explanation-stripping code, and each
-    source notebook's name and bytes."""
+    """A digest of what a release is computed from: the versions of nbgrader, nbconvert and
+    nbformat, the configuration ``config`` (written for a placeholder root), the
+    explanation-stripping code, and each source notebook's name and bytes."""
+    import nbconvert
+    import nbformat
     import nbgrader
 
     from . import explanations
 
-    h = hashlib.sha256(f"nbgrader {nbgrader.__version__}\0".encode())
+    versions = f"nbgrader {nbgrader.__version__} nbconvert {nbconvert.__version__} " \
+               f"nbformat {nbformat.__version__}"
+    h = hashlib.sha256(versions.encode() + b"\0")
     h.update(config.encode() + b"\0")
     h.update(Path(explanations.__file__).read_bytes() + b"\0")
     for nb in notebooks:
