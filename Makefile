@@ -129,9 +129,9 @@ hub: $(STAMP) hub-deps wheel-deps sandbox-deps
 # costs 2 s of CPU, in every pytest process before tests/conftest.py can put it off
 PYTEST := $(BIN)/python -m pytest -p no:nbmake
 
-## test: the whole suite (library, notebooks, grading bank, browser): about 13 minutes on 2 quiet cores
+## test: the whole suite (library, notebooks, grading bank, browser): 15 minutes measured on 2 quiet cores
 test: $(STAMP) browser-deps a11y-deps sandbox-deps wheel-deps postgres-deps hub-deps mathjax-deps
-	@echo "make test: the whole suite, about 13 minutes on 2 quiet cores (one dot per test; make test-fast: about 1 minute)"
+	@echo "make test: the whole suite, 15 minutes measured on 2 quiet cores (one dot per test; make test-fast: about 1 minute)"
 	$(PYTEST) -n 2 --dist loadgroup -q
 
 ## test-fast: the library against its oracles, the judging, the notebooks' contract and their

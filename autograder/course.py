@@ -32,7 +32,7 @@ from pathlib import Path
 
 from course_lib.variants import ASSIGNMENT
 
-from . import explanations
+from . import explanations, release_cache
 from .service.policy import PARAGRAPH_MARK, load_policy, policy_paragraph
 
 #: ``ASSIGNMENT``: the nbgrader assignment that holds all six question notebooks, named once in
@@ -56,6 +56,8 @@ TEXT_STUB = "YOUR ANSWER HERE"
 IGNORE_STDERR = r"Matplotlib is building the font cache"
 
 _STAMP = f".{ASSIGNMENT}-release.json"
+#: The root the release cache's key is computed for: what nbgrader makes does not depend on it.
+_ANY_ROOT = Path("/course-root")
 
 
 def source_notebooks(notebooks_dir: Path | None = None) -> list[Path]:
@@ -328,18 +330,20 @@ def _prepare(course: CourseDir, notebooks: list[Path], names: list[str]) -> Cour
     for nb in notebooks:
         shutil.copyfile(nb, course.source_dir / nb.name)
 
-    from nbgrader.api import Gradebook
-
-    with Gradebook(db_url, course_id=COURSE_ID) as gb:
-        gb.update_or_create_assignment(ASSIGNMENT)
-
-    if course.release_dir.exists():
-        _backup_student_work(course, stamp)
-        shutil.rmtree(course.release_dir, ignore_errors=True)
-    run_nbgrader(["generate_assignment", ASSIGNMENT, "--force"], root, db_url)
+    # a fresh root (no gradebook, no release yet) may be served from the release cache
+    fresh = (db_url == default_db_url(root) and not db_file.exists()
+             and not course.release_dir.exists())
+    cache_key = None
+    if fresh and release_cache.cache_dir() is not None:
+        cache_key = release_cache.key(notebooks, config_text(
+            default_db_url(_ANY_ROOT), exchange_root=_ANY_ROOT / "exchange"))
+    if not (cache_key and release_cache.restore(cache_key, course.release_dir, db_file,
+                                                expected)):
+        _generate(course, stamp)
+        if cache_key:
+            release_cache.store(cache_key, course.release_dir, db_file)
     for released_nb in course.release_dir.glob("*.ipynb"):
-        explanations.strip(released_nb)      # an item's explanation comes with the feedback
-        state_policy(released_nb, policy)
+        state_policy(released_nb, policy)  # after the cache: each course states its own policy
     released = sorted(p.name for p in course.release_dir.glob("*.ipynb"))
     if released != expected:
         raise RuntimeError(f"generate_assignment released {released}, expected {expected}")
@@ -368,6 +372,21 @@ def state_policy(path: Path, paragraph: str) -> None:
     if source != cell.source:
         cell.source = source
         nbformat.write(nb, str(path))
+
+
+def _generate(course: CourseDir, stamp: Path) -> None:
+    """Register the assignment and release it with ``nbgrader generate_assignment`` (a release
+    folder a student edited is moved aside first), explanations stripped from the release."""
+    from nbgrader.api import Gradebook
+
+    with Gradebook(course.db_url, course_id=COURSE_ID) as gb:
+        gb.update_or_create_assignment(ASSIGNMENT)
+    if course.release_dir.exists():
+        _backup_student_work(course, stamp)
+        shutil.rmtree(course.release_dir, ignore_errors=True)
+    run_nbgrader(["generate_assignment", ASSIGNMENT, "--force"], course.root, course.db_url)
+    for released_nb in course.release_dir.glob("*.ipynb"):
+        explanations.strip(released_nb)      # an item's explanation comes with the feedback
 
 
 def _sha(path: Path) -> str:

@@ -5,6 +5,10 @@
   (``course_lib.variants``) the notebooks work when the tests run them, as on the hub;
 - ``repo_root``: the repository root;
 - ``source_notebooks``: the committed ``notebooks/q*.ipynb`` (skips when none exist yet);
+- ``sources``: the parsed source notebooks that have registered exercises (skips when none);
+- ``mode``: the grading sandbox's mode on this machine (skips when it cannot isolate);
+- ``template_gradebook``: the gradebook of a fresh course (every cell registered, no student),
+  which tests copy into their ``OUT``;
 - ``course``: a session-scoped nbgrader course (``autograder.course.prepare_course``) in a
   temporary directory, assignment ``tripos2006`` released and registered in its gradebook.
   Each xdist worker gets its own; tests that write into it (autograde) use one xdist group.
@@ -22,6 +26,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -29,17 +34,19 @@ import pytest
 
 #: run at the start of every Python process the tests launch, and of this one (see its docstring)
 STARTUP = Path(__file__).resolve().parent / "startup"
+REPO_ROOT = Path(__file__).resolve().parents[1]
 os.environ["PYTHONPATH"] = os.pathsep.join(
     p for p in (str(STARTUP), os.environ.get("PYTHONPATH", "")) if p)
 _spec = importlib.util.spec_from_file_location("_tests_startup", STARTUP / "sitecustomize.py")
 _spec.loader.exec_module(importlib.util.module_from_spec(_spec))
 
 os.environ["MPLBACKEND"] = "Agg"
+#: a fresh course root's release and gradebook (nbgrader's generate_assignment, about 400 SQLite
+#: commits) are copied from here after the first (autograder/release_cache.py)
+os.environ.setdefault("AUTOGRADER_COURSE_CACHE", str(REPO_ROOT / ".cache" / "course-release"))
 os.environ.setdefault("JUPYTERHUB_USER", "ci-student")
 #: the student id every notebook run by the tests works as (see course_lib.variants)
 CI_STUDENT = os.environ["JUPYTERHUB_USER"]
-
-REPO_ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="session")
@@ -63,6 +70,42 @@ def course(tmp_path_factory, source_notebooks):
     from autograder.course import prepare_course
 
     return prepare_course(tmp_path_factory.mktemp("course"), notebooks=source_notebooks)
+
+
+@pytest.fixture(scope="session")
+def sources():
+    """The parsed source notebooks that have registered exercises (skips when none)."""
+    grading = str(REPO_ROOT / "tests" / "grading")
+    if grading not in sys.path:
+        sys.path.insert(0, grading)
+    from gradingtools import course_sources
+
+    found = course_sources()
+    if not found:
+        pytest.skip("no source notebooks with registered exercises yet")
+    return found
+
+
+@pytest.fixture(scope="session")
+def mode():
+    """The sandbox's mode on this machine (as root: a uid of its own); skips when the operating
+    system cannot isolate students' code here."""
+    from autograder.isolation import IsolationUnavailable, probe
+
+    try:
+        return probe()
+    except IsolationUnavailable as exc:
+        pytest.skip(str(exc))
+
+
+@pytest.fixture(scope="session")
+def template_gradebook(tmp_path_factory, sources):
+    """The gradebook of a fresh course (``prepare_course``: every cell of the assignment
+    registered, no student yet), for tests to copy into their ``OUT``; never written to."""
+    from autograder.course import prepare_course
+
+    root = tmp_path_factory.mktemp("gradebook-template")
+    return prepare_course(root, notebooks=[s.path for s in sources]).root / "gradebook.db"
 
 
 @pytest.fixture(scope="session")

@@ -88,9 +88,13 @@ def strip_hidden(source: str) -> str:
 
 
 def gradebook_knows(db_url: str, sources: list[SourceNotebook]) -> bool:
-    """Whether the gradebook already holds the assignment with every grade cell of ``sources``."""
+    """Whether the gradebook already holds the assignment with every grade cell of ``sources``
+    (a SQLite file that does not exist is not created to ask: ``prepare_course`` then knows
+    the course root is fresh)."""
     from nbgrader.api import Gradebook, MissingEntry
 
+    if db_url.startswith("sqlite:///") and not Path(db_url[len("sqlite:///"):]).is_file():
+        return False
     try:
         with Gradebook(db_url, course_id=COURSE_ID) as gb:
             try:

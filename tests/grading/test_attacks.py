@@ -27,7 +27,7 @@ from gradingtools import (SECRET, append_cell, cases_of, course_sources, expect_
 
 from autograder.exercises import REGISTRY
 
-pytestmark = [pytest.mark.xdist_group("grading")]
+pytestmark = [pytest.mark.xdist_group("attacks")]
 
 _ALL = course_sources()
 SRC = _ALL[0] if _ALL else None

@@ -11,8 +11,6 @@ from gradingtools import SECRET, model_version, read_grades, write_nb
 from autograder.grade import cli
 from autograder.isolation import UNSAFE_WARNING, IsolationUnavailable
 
-pytestmark = [pytest.mark.xdist_group("grading")]
-
 
 def _args(tmp_path, *extra):
     parser = argparse.ArgumentParser()

@@ -14,7 +14,7 @@ from autograder.exercises import REGISTRY
 from gradingtools import (SECRET, append_cell, cases_of, model_version, read_grades, run_grade,
                           target_of, write_nb)
 
-pytestmark = [pytest.mark.xdist_group("grading")]
+pytestmark = [pytest.mark.xdist_group("feedback")]
 
 #: Names whose answers are curves, polygons or meshes, and a wrong-but-plausible variant.
 GEOMETRIC = ("sample_curve", "clip_polygon", "marching_cubes")

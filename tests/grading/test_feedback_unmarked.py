@@ -10,8 +10,6 @@ import pytest
 from autograder import cli_feedback
 from autograder.outputs import handback
 
-pytestmark = [pytest.mark.xdist_group("grading")]
-
 
 def _notebook(student, marked_a, marked_b=True):
     return handback.NotebookMarks(student, "q1_imaging", [

@@ -27,7 +27,7 @@ from autograder.outputs.variants import graded_as_html
 from gradingtools import read_grades, run_grade, write_nb
 from test_own_numbers import _differs, literal_version
 
-pytestmark = [pytest.mark.xdist_group("grading"), pytest.mark.slow]
+pytestmark = [pytest.mark.xdist_group("graded_as"), pytest.mark.slow]
 
 
 def _items(src):

@@ -16,7 +16,7 @@ from autograder.exercises import REGISTRY
 from gradingtools import (expect_full_marks, model_version, read_grades, run_grade,
                           typed_version, write_nb)
 
-pytestmark = [pytest.mark.xdist_group("grading"), pytest.mark.slow]
+pytestmark = [pytest.mark.xdist_group("own_numbers"), pytest.mark.slow]
 
 STUDENTS = ("alice", "bob")
 

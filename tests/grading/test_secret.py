@@ -14,8 +14,6 @@ from autograder.grade import cli
 from autograder.grade import secret as secret_mod
 from autograder.isolation import IsolationUnavailable
 
-pytestmark = [pytest.mark.xdist_group("grading")]
-
 
 @pytest.fixture
 def home(tmp_path, monkeypatch):
