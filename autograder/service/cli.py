@@ -1,7 +1,8 @@
 """``python -m autograder watch``: grade each submission as it arrives, with feedback at once.
 
     python -m autograder watch --exchange ROOT [--course COURSE] [--poll S] [--jobs N]
-                               [--reference-seconds S] [--once] [--unsafe-no-isolation]
+                               [--workers W] [--reference-seconds S] [--once]
+                               [--unsafe-no-isolation]
 
 Watches ``ROOT/4f9/inbound`` (nbgrader's exchange), journals every submission in
 ``COURSE/service/journal.db``, and for each: collects it by the private-exchange rules, grades
@@ -43,6 +44,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add("--poll", type=float, default=2.0, help="seconds between looks at the inbound")
     add("--jobs", type=int, default=max(1, min(8, os.cpu_count() or 1)),
         help="sandboxes run in parallel for a submission's notebooks (default: the CPUs, at most 8)")
+    add("--workers", type=int, default=2,
+        help="submissions graded at once, each in a process of its own, sharing the --jobs "
+        "sandboxes (default 2; 1: one at a time in the service's process)")
     add("--timeout", type=float, default=10.0, help="time limit per case, in seconds")
     add("--memory-mb", type=int, default=2048, help="memory limit of each sandbox, in MB")
     add("--secret-file", type=Path, default=None, help="the course secret (as for grade)")
@@ -112,7 +116,7 @@ def build(args) -> Service:
     db_url = None if args.no_gradebook else (args.db_url or default_db_url(args.course))
     return Service(Path(args.course), inbound, Path(args.exchange),
                    Journal(journal), policy, sources,
-                   opts, budgets, db_url)
+                   opts, budgets, db_url, workers=max(1, args.workers))
 
 
 def main(args: argparse.Namespace) -> int:
