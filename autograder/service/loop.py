@@ -3,8 +3,9 @@
 Each round lists the exchange's inbound (:func:`~.inbox.scan`), journals what is new (a
 refused folder is journalled ``failed`` with its reason), and grades queued submissions in the
 journal's fair order (:meth:`~.journal.Journal.next_ready`: round-robin over students): one at a
-time in this process, or several at once in worker processes (:mod:`.workers`). Polling costs one ``listdir`` of the inbound and an ``lstat`` walk of each folder not
-yet journalled, every ``poll`` seconds (default 2).
+time in this process, or several at once in worker processes (:mod:`.workers`). Polling costs
+one ``listdir`` of the inbound and an ``lstat`` walk of each folder not yet journalled, every
+``poll`` seconds (default 2).
 """
 
 from __future__ import annotations

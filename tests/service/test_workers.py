@@ -54,7 +54,7 @@ def test_two_in_flight_a_slow_student_waits_behind_their_own(service, q1):
     assert svc.journal.states() == {"queued": 0, "grading": 0, "done": 4, "failed": 0}
     assert all(tries == 1 for rows in t.values() for _, _, tries, _ in rows)   # once each
     (slow_start, slow_end, _, _), (again_start, _, _, _) = t["sl123"]
-    (aa_start, aa_end, _, _), (bb_start, bb_end, _, _) = t["aa123"][0], t["bb123"][0]
+    (aa_start, _, _, _), (bb_start, bb_end, _, _) = t["aa123"][0], t["bb123"][0]
     # started in arrival order; the class graded while the slow notebook held a worker
     assert slow_start <= aa_start <= bb_start
     assert aa_start < slow_end and bb_start < slow_end
