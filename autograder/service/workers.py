@@ -29,7 +29,6 @@ import multiprocessing
 import multiprocessing.connection
 import os
 import signal
-import sys
 from dataclasses import dataclass, replace
 
 from .grading import Service, process_started, retry_or_fail
@@ -45,6 +44,7 @@ class _InFlight:
     process: multiprocessing.process.BaseProcess
     row: Row
     jobs: int
+    said: multiprocessing.connection.Connection    #: the worker's one line comes back here
 
 
 def _die_with(parent: int) -> None:
@@ -58,15 +58,17 @@ def _die_with(parent: int) -> None:
         os._exit(1)
 
 
-def _work(svc: Service, row: Row, jobs: int, parent: int) -> None:
-    """The worker process: grade ``row`` with ``jobs`` sandboxes, say what happened."""
+def _work(svc: Service, row: Row, jobs: int, parent: int, say) -> None:
+    """The worker process: grade ``row`` with ``jobs`` sandboxes; what happened goes back to
+    the service's process through ``say`` (which prints it where its own output goes)."""
     _die_with(parent)
     # the parent's SQLite connection must not be used across fork: a connection of its own
     own = replace(svc, journal=Journal(svc.journal.path), opts=replace(svc.opts, jobs=jobs))
     try:
-        print(process_started(own, row), file=sys.stderr, flush=True)
+        say.send(process_started(own, row))
     finally:
         own.journal.close()
+        say.close()
 
 
 class Workers:
@@ -96,10 +98,12 @@ class Workers:
             waiting = min(self.svc.journal.ready_students(now), self.workers - len(self.running))
             jobs = max(1, self._free_slots() // max(1, waiting))
             self.svc.journal.start(row)
-            proc = _CONTEXT.Process(target=_work, args=(self.svc, row, jobs, os.getpid()),
+            hear, say = _CONTEXT.Pipe(duplex=False)
+            proc = _CONTEXT.Process(target=_work, args=(self.svc, row, jobs, os.getpid(), say),
                                     name=f"grade-{row.id}", daemon=True)
             proc.start()
-            self.running.append(_InFlight(proc, row, jobs))
+            say.close()
+            self.running.append(_InFlight(proc, row, jobs, hear))
             started += 1
         return started
 
@@ -109,13 +113,19 @@ class Workers:
             multiprocessing.connection.wait([f.process.sentinel for f in self.running], timeout)
 
     def reap(self) -> list[str]:
-        """Collect the workers that ended; a line for each whose worker died before its row
-        was settled (the row is queued again or failed)."""
+        """Collect the workers that ended: what each said it did, or, for one that died before
+        its row was settled, what became of the row (queued again or failed)."""
         said, still = [], []
         for f in self.running:
             if f.process.is_alive():
                 still.append(f)
                 continue
+            try:
+                if f.said.poll():
+                    said.append(f.said.recv())
+            except (EOFError, OSError):
+                pass
+            f.said.close()
             f.process.join()
             code = f.process.exitcode
             f.process.close()
@@ -133,4 +143,5 @@ class Workers:
             f.process.kill()
         for f in self.running:
             f.process.join()
+            f.said.close()
         self.running = []
