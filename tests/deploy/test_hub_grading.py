@@ -176,6 +176,10 @@ def test_the_service_runs_as_the_grader_and_answers_alone(grading_hub, measured)
     assert sorted(p.stem for p in fetched) == sorted(NOTEBOOKS), said
     page = fetched[0].read_text(encoding="utf-8")
     assert attempts_line(4, 5) in page and ALONE in page
+    # a classmate can neither list the exchange's pages nor so find this student's
+    feedback = Path(settings.paths["exchange"]) / settings.course_id / "feedback"
+    proc = hub.as_user(LONE[1], ["ls", feedback])
+    assert proc.returncode != 0 and "Permission denied" in proc.stderr, proc.stdout[:300]
     measured["alone_latency_s"] = lone
 
 
