@@ -106,6 +106,17 @@ def _wait_done(settings, users, count: int) -> dict[str, list[tuple]]:
                 f"{log.read_text(errors='replace')[-4000:] if log.exists() else 'no watch.log'}")
 
 
+def _wait_ready(settings) -> None:
+    """Until the service has measured its budgets (its start-up) and is watching."""
+    log = Path(settings.paths["course_dir"]) / "service" / "watch.log"
+    deadline = time.monotonic() + PATIENCE
+    while time.monotonic() < deadline:
+        if log.exists() and "time budget per notebook" in log.read_text(errors="replace"):
+            return
+        time.sleep(1.0)
+    pytest.fail(f"the service never started: {log.read_text()[-3000:] if log.exists() else ''}")
+
+
 def _latency(settings, row: tuple) -> float:
     """Seconds from the submission's time to its newest page in the exchange."""
     pages = _pages(settings, row[0])
@@ -163,6 +174,7 @@ def test_the_service_runs_as_the_grader_and_answers_alone(grading_hub, measured)
     assert procs, "no `autograder watch` process serves the hub's course"
     grader_uid = hub.pwd.getpwnam(settings.grader).pw_uid
     assert {uid for _, uid in procs} == {grader_uid}, procs
+    _wait_ready(settings)       # measured alone: not behind the service's start-up
     lone = []
     for user in LONE:
         _student(settings, user, "fetch_assignment", A)
