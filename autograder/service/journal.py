@@ -121,14 +121,6 @@ class Journal:
         found = cur.fetchone()
         return Row(*found) if found else None
 
-    def ready_students(self, now: float | None = None) -> int:
-        """How many students have a submission :meth:`next_ready` could hand out now."""
-        now = time.time() if now is None else now
-        return self.db.execute(
-            "SELECT COUNT(DISTINCT student) FROM submissions WHERE state='queued' "
-            "AND retry_at <= ? AND student NOT IN "
-            "(SELECT student FROM submissions WHERE state='grading')", (now,)).fetchone()[0]
-
     def start(self, row: Row) -> None:
         self.db.execute("UPDATE submissions SET state='grading', tries=tries+1, started=? "
                         "WHERE id=?", (time.time(), row.id))

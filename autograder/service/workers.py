@@ -13,9 +13,10 @@ its own and exits.
 - **Dies with the service.** Each worker asks Linux for SIGKILL when the service dies
   (``PR_SET_PDEATHSIG``): a service killed mid-grade leaves no worker that could finish a row the
   restarted service is grading again; the restart finds the row ``grading`` and resumes it.
-- **Sandboxes bounded by ``--jobs``.** The main process shares ``opts.jobs`` sandbox slots among
-  the submissions in flight: a submission alone gets them all, a burst splits them (each worker
-  at least one). A submission starts only when a slot is free.
+- **Sandboxes bounded by ``--jobs``.** Each submission in flight gets an equal share of the
+  ``opts.jobs`` sandbox slots (``jobs // workers``, at least one) and starts only when its share
+  is free. Not all of them when it is alone: a submission that burns its budget would then hold
+  every slot, and the next student's would wait for it.
 - **Order and fairness** are the journal's (:meth:`~.journal.Journal.next_ready`): students in
   the order the exchange saw them, round-robin, and no second submission of a student while one
   of theirs is in flight, so a student whose notebook burns its budget holds one worker and
@@ -91,12 +92,11 @@ class Workers:
         """Start workers for ready submissions while a worker and a sandbox slot are free;
         how many were started."""
         started = 0
-        while len(self.running) < self.workers and self._free_slots() > 0:
+        jobs = max(1, self.slots // self.workers)
+        while len(self.running) < self.workers and self._free_slots() >= jobs:
             row = self.svc.journal.next_ready(now)
             if row is None:
                 break
-            waiting = min(self.svc.journal.ready_students(now), self.workers - len(self.running))
-            jobs = max(1, self._free_slots() // max(1, waiting))
             self.svc.journal.start(row)
             hear, say = _CONTEXT.Pipe(duplex=False)
             proc = _CONTEXT.Process(target=_work, args=(self.svc, row, jobs, os.getpid(), say),

@@ -69,10 +69,10 @@ def test_two_in_flight_a_slow_student_waits_behind_their_own(service, q1):
 
 
 def test_the_sandboxes_are_shared_within_jobs(service, q1, monkeypatch):
-    """A submission alone gets every ``--jobs`` slot; two at once get one each; a third waits
-    for a free slot (counted from the journal, with the fork replaced by a stand-in)."""
-    svc = service()
-    svc.workers = 3
+    """Each submission in flight gets ``jobs // workers`` sandboxes (at least one), alone or
+    not, and starts only when that many are free (the fork replaced by a stand-in that
+    records what each worker was given)."""
+    svc = service()                       # --jobs 2
     started = []
 
     class Stand:
@@ -84,18 +84,17 @@ def test_the_sandboxes_are_shared_within_jobs(service, q1, monkeypatch):
             pass
 
     monkeypatch.setattr(workers._CONTEXT, "Process", Stand)
-    submit(svc, "aa123", {q1.name: honest(q1, "aa123")})
+    for student in ("aa123", "bb123", "cc123"):
+        submit(svc, student, {q1.name: honest(q1, student)})
     loop.notice(svc, now=later())
-    pool = workers.Workers(svc)
-    assert pool.fill(now=later()) == 1 and started == [2]         # alone: both slots
-    pool = workers.Workers(svc)
-    svc.journal.db.execute("UPDATE submissions SET state='queued'")
-    submit(svc, "bb123", {q1.name: honest(q1, "bb123")})
-    submit(svc, "cc123", {q1.name: honest(q1, "cc123")})
-    loop.notice(svc, now=later())
-    started.clear()
-    assert pool.fill(now=later()) == 2 and started == [1, 1]      # a burst: one each
-    assert svc.journal.states()["queued"] == 1                    # the third waits
+    for n_workers, shares in ((1, [2]), (2, [1, 1]), (3, [1, 1]), (4, [1, 1])):
+        svc.workers = n_workers
+        svc.journal.db.execute("UPDATE submissions SET state='queued'")
+        started.clear()
+        pool = workers.Workers(svc)
+        assert pool.fill(now=later()) == len(shares) and started == shares, n_workers
+        # the others wait for a free slot, queued
+        assert svc.journal.states()["queued"] == 3 - len(shares)
 
 
 #: the service in a child process with two workers; the worker stops inside the grading
