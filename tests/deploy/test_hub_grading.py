@@ -37,7 +37,8 @@ from hubtools import ARTIFACTS, BURST, LONE
 
 import hub  # deploy/hub.py
 
-pytestmark = [pytest.mark.xdist_group("hub"), pytest.mark.slow]
+# the first run builds the two environments inside the fixture (about 15 minutes)
+pytestmark = [pytest.mark.xdist_group("hub"), pytest.mark.slow, pytest.mark.timeout(3600)]
 
 A = "tripos2006"
 NOTEBOOKS = ("q1_imaging", "q2_nuclear", "q3_marching_cubes", "q4_splines", "q5_phong",
