@@ -16,7 +16,7 @@ read their feedback with ``nbgrader fetch_feedback``: no instructor command is r
 Submit -> feedback-fetchable latency is measured from the submission's own time (the kernel's
 ctime, as the journal holds it) to the newest of its pages in the exchange; the numbers go to
 ``test-artifacts/deploy/hub-burst.json`` (``python -m benchmarks --only bench_hub_burst`` runs
-this module and prints them). About 10 minutes on the 2-core machine once the environments are
+this module and prints them). About 11 minutes on the 2-core machine once the environments are
 cached (``tests/deploy/conftest.py``); the first run builds them (about 15 minutes more).
 No browser here: the term test (``test_hub_term.py``) drives Chromium.
 """
