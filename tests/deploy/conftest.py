@@ -89,9 +89,11 @@ def _wait_for_hub(proc, url: str, log: Path, timeout: float = 120) -> None:
 
 @contextlib.contextmanager
 def running_hub(prefix: str = PREFIX, students: tuple[str, ...] = STUDENTS,
-                instructor: str = INSTRUCTOR, grader: str = GRADER, log_name: str = "hub.log"):
+                instructor: str = INSTRUCTOR, grader: str = GRADER, log_name: str = "hub.log",
+                **options):
     """A running hub whose accounts are named from ``prefix``: ``dict(url, settings, passwords,
-    log)``; everything removed afterwards (skips, with the reason, where it cannot run)."""
+    log)``; everything removed afterwards (skips, with the reason, where it cannot run).
+    ``options``: more :class:`hub.HubSettings` (e.g. ``grading_service=False``)."""
     reason = _skip_reason()
     if reason:
         pytest.skip(reason)
@@ -102,7 +104,8 @@ def running_hub(prefix: str = PREFIX, students: tuple[str, ...] = STUDENTS,
     os.chmod(state, 0o755)
     settings = hub.HubSettings(state=str(state), port=hub.free_port(), course_id="4f9",
                                grader=grader, students_group=f"{prefix}-students",
-                               instructors_group=f"{prefix}-instructors", envs=str(ENVS))
+                               instructors_group=f"{prefix}-instructors", envs=str(ENVS),
+                               **options)
     accounts = (*students, instructor, grader)
     _remove_accounts(settings, accounts)  # a run killed half-way leaves them behind
     passwords = {name: secrets.token_urlsafe(12) for name in (*students, instructor)}
@@ -134,8 +137,12 @@ def running_hub(prefix: str = PREFIX, students: tuple[str, ...] = STUDENTS,
 
 @pytest.fixture(scope="module")
 def course_hub():
-    """A running hub: ``dict(url, settings, passwords, log)``; everything removed afterwards."""
-    with running_hub() as running:
+    """A running hub: ``dict(url, settings, passwords, log)``; everything removed afterwards.
+
+    Its grading service is switched off: the term test walks the batch term (collect, grade,
+    mark, hand back after the deadline), which the service's own pages and gradebook writes
+    would race; the service has its hub in ``grading_hub``."""
+    with running_hub(grading_service=False) as running:
         yield running
 
 
