@@ -98,9 +98,11 @@ class Workers:
             if row is None:
                 break
             self.svc.journal.start(row)
+            # not a daemon: a daemonic process may not start processes of its own, and the
+            # batch may (a pool of sandboxes); :meth:`stop` ends the workers instead
             hear, say = _CONTEXT.Pipe(duplex=False)
             proc = _CONTEXT.Process(target=_work, args=(self.svc, row, jobs, os.getpid(), say),
-                                    name=f"grade-{row.id}", daemon=True)
+                                    name=f"grade-{row.id}", daemon=False)
             proc.start()
             say.close()
             self.running.append(_InFlight(proc, row, jobs, hear))
