@@ -57,7 +57,7 @@ def run(smoke: bool = False) -> list[Row]:
         _measure()
     if not RESULTS.exists():       # --smoke on a fresh clone: say so, measure nothing
         return [Row(SECTION, "burst", "not measured", math.nan, unit="s",
-                    notes="needs root and about 11 minutes: run without --smoke")]
+                    notes="needs root and about 10 minutes: run without --smoke")]
     got = json.loads(RESULTS.read_text())
     alone, burst = got["alone_latency_s"], got["burst_latency_s"]
     login, idle = got["login_s"], got.get("login_idle_s")

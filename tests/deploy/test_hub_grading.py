@@ -16,9 +16,10 @@ read their feedback with ``nbgrader fetch_feedback``: no instructor command is r
 Submit -> feedback-fetchable latency is measured from the submission's own time (the kernel's
 ctime, as the journal holds it) to the newest of its pages in the exchange; the numbers go to
 ``test-artifacts/deploy/hub-burst.json`` (``python -m benchmarks --only bench_hub_burst`` runs
-this module and prints them). About 11 minutes on the 2-core machine once the environments are
+this module and prints them). About 10 minutes on the 2-core machine once the environments are
 cached (``tests/deploy/conftest.py``); the first run builds them (about 15 minutes more).
-No browser here: the term test (``test_hub_term.py``) drives Chromium.
+Two of the 30 log in and submit in Chromium (the Assignments panel, as ``test_hub_term.py``
+does); the other 28 use ``nbgrader submit``.
 """
 
 from __future__ import annotations
@@ -29,22 +30,27 @@ import os
 import re
 import sqlite3
 import statistics
+import threading
 import time
 from pathlib import Path
 
 import pytest
-from hubtools import ARTIFACTS, BURST, LONE
+from hubtools import ARTIFACTS, BURST, CHROMIUM, LONE
 
 import hub  # deploy/hub.py
 
 # the first run builds the two environments inside the fixture (about 15 minutes)
-pytestmark = [pytest.mark.xdist_group("hub"), pytest.mark.slow, pytest.mark.timeout(3600)]
+pytestmark = [pytest.mark.xdist_group("hub"), pytest.mark.slow, pytest.mark.browser,
+              pytest.mark.timeout(3600)]
 
 A = "tripos2006"
 NOTEBOOKS = ("q1_imaging", "q2_nuclear", "q3_marching_cubes", "q4_splines", "q5_phong",
              "q6_clipping")
 ALONE = LONE[0]
 RESULTS = ARTIFACTS / "hub-burst.json"
+#: two of the burst submit in Chromium, through the Assignments panel (the others with
+#: ``nbgrader submit``)
+IN_BROWSER = BURST[:2]
 #: seconds between two students' submits in the burst: 30 students within 60 s
 SPACING = 2.0
 #: how long the test waits for the service (not a speed target: bench_hub_burst reports speed)
@@ -196,9 +202,38 @@ def test_the_service_runs_as_the_grader_and_answers_alone(grading_hub, measured)
     measured["alone_latency_s"] = lone
 
 
+def _in_browser(grading_hub, ready: threading.Event, go: dict) -> list[float]:
+    """:data:`IN_BROWSER` in Chromium, in a thread of its own (Playwright's sync API): log in
+    through the hub's form and fetch in the Assignments panel, then set ``ready``; once
+    ``go["start"]`` is given, press Submit for each at its time in the burst (as
+    ``test_hub_term`` does). The submits' end times."""
+    from playwright.sync_api import sync_playwright
+    from test_hub_term import CHROMIUM_ARGS, _fetch, _submit
+    from test_hub_term import _login as _browser_login
+
+    url, passwords = grading_hub["url"], grading_hub["passwords"]
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_ARGS)
+        try:
+            pages = [_browser_login(browser, url, u, passwords[u]) for u in IN_BROWSER]
+            for page, user in zip(pages, IN_BROWSER):
+                _fetch(page, user)
+            ready.set()
+            while "start" not in go:
+                time.sleep(0.1)
+            ends = []
+            for page, user in zip(pages, IN_BROWSER):
+                time.sleep(max(0.0, go["start"] + BURST.index(user) * SPACING - time.time()))
+                _submit(page, user)
+                ends.append(time.time())
+            return ends
+        finally:
+            browser.close()
+
+
 def _burst(grading_hub, start: float) -> tuple[list[float], list[tuple[bool, float]]]:
-    """The 30 submits, one every :data:`SPACING` s from ``start``, with two logins meanwhile;
-    the submits' end times and the logins' results."""
+    """The submits of all but :data:`IN_BROWSER`, one every :data:`SPACING` s from ``start``,
+    with three logins meanwhile; the submits' end times and the logins' results."""
     settings, url = grading_hub["settings"], grading_hub["url"]
 
     def submit(i: int, user: str) -> float:
@@ -212,19 +247,30 @@ def _burst(grading_hub, start: float) -> tuple[list[float], list[tuple[bool, flo
 
     # a thread for each: every one sleeps until its own time
     with concurrent.futures.ThreadPoolExecutor(len(BURST) + 3) as pool:
-        submits = [pool.submit(submit, i, u) for i, u in enumerate(BURST)]
+        submits = [pool.submit(submit, i, u) for i, u in enumerate(BURST)
+                   if u not in IN_BROWSER]
         logins = [pool.submit(login, at) for at in (20.0, 40.0, 75.0)]
         return [f.result() for f in submits], [f.result() for f in logins]
 
 
 def test_a_deadline_burst_of_30_students(grading_hub, measured):
     settings = grading_hub["settings"]
-    with concurrent.futures.ThreadPoolExecutor(4) as pool:      # fetching is not the burst
-        list(pool.map(lambda u: _student(settings, u, "fetch_assignment", A), BURST))
-    idle = [_login(grading_hub["url"], ALONE, grading_hub["passwords"][ALONE]) for _ in range(3)]
-    assert all(ok for ok, _ in idle), idle
-    start = time.time() + 1.0
-    ends, logins = _burst(grading_hub, start)
+    ready, go = threading.Event(), {}
+    with concurrent.futures.ThreadPoolExecutor(1) as chromium:
+        browsing = chromium.submit(_in_browser, grading_hub, ready, go)
+        with concurrent.futures.ThreadPoolExecutor(4) as pool:  # fetching is not the burst
+            list(pool.map(lambda u: _student(settings, u, "fetch_assignment", A),
+                          [u for u in BURST if u not in IN_BROWSER]))
+        while not ready.wait(1.0):
+            if browsing.done():
+                browsing.result()                               # its failure, raised here
+        idle = [_login(grading_hub["url"], ALONE, grading_hub["passwords"][ALONE])
+                for _ in range(3)]
+        assert all(ok for ok, _ in idle), idle
+        start = time.time() + 1.0
+        go["start"] = start
+        ends, logins = _burst(grading_hub, start)
+        ends += browsing.result()
     rows = _wait_done(settings, BURST, 1)
     assert all(ok for ok, _ in logins), logins
     # every submission once: one row per student, done at its first try
