@@ -25,6 +25,12 @@ What ``up`` builds, under the state folder (default ``/srv/4f9-hub``, owned by r
 - ``hub/``: JupyterHub's database, cookie secret and proxy pid (root only, 0700);
 - ``hub.json``: the settings ``deploy/jupyterhub_config.py`` reads.
 
+Besides the formgrader, the hub runs the grading service (``python -m autograder watch``,
+docs/grading-service.md) as a managed service of the grader account: every submission is graded
+as it arrives and its feedback page handed back through nbgrader's exchange. Its log is
+``<course>/service/watch.log``; ``grading_service``, ``grading_jobs`` and ``grading_workers`` in
+``hub.json`` switch it off or size it (docs/deploying.md).
+
 The hub itself runs as ``deploy/run_hub.py`` (JupyterHub, patient with the formgrader service,
 ended by Ctrl-C with one line).
 
@@ -72,6 +78,11 @@ class HubSettings:
     proxy_command: str = "/usr/bin/configurable-http-proxy"
     #: where the two environments live (default ``<state>/envs``; the tests keep them cached)
     envs: str = ""
+    #: the grading service (``python -m autograder watch``) as a hub-managed service of the
+    #: grader account; its sandboxes at a time (``--jobs``) and submissions at once (``--workers``)
+    grading_service: bool = True
+    grading_jobs: int = 2
+    grading_workers: int = 2
 
     def __post_init__(self):
         for name in ("hub_port", "proxy_api_port", "service_port"):
@@ -80,6 +91,10 @@ class HubSettings:
         for name in ("grader", "students_group", "instructors_group", "course_id"):
             if not getattr(self, name).replace("-", "").replace("_", "").isalnum():
                 raise ValueError(f"{name} must be letters, digits, '-' or '_': {getattr(self, name)!r}")
+        for name in ("grading_jobs", "grading_workers"):
+            if not isinstance(getattr(self, name), int) or getattr(self, name) < 1:
+                raise ValueError(f"{name} must be a whole number, at least 1: "
+                                 f"{getattr(self, name)!r}")
 
     @property
     def paths(self) -> dict:

@@ -4,7 +4,9 @@ Every path, port and name comes from the settings file ``deploy/hub.py`` writes
 (``$COURSE_HUB_SETTINGS``, ``<state>/hub.json``), so this file never needs editing. The layout
 follows nbgrader's ``demos/demo_one_class_multiple_graders``: real Unix users, the default
 ``LocalProcessSpawner``, the formgrader as a hub service named after the course, run as the
-course's grader account and reachable by the group ``formgrade-<course>``.
+course's grader account and reachable by the group ``formgrade-<course>``; and the grading
+service (``python -m autograder watch``, feedback on every submission) as a second managed service
+of the grader account, which the hub starts, restarts when it exits, and stops with itself.
 """
 
 import grp
@@ -74,3 +76,22 @@ c.JupyterHub.services = [{
                         JUPYTERHUB_DEFAULT_URL="/lab", MPLBACKEND="Agg"),
     "oauth_no_confirm": True,
 }]
+
+# --- the grading service: every submission graded as it arrives, feedback at once -------------
+# (docs/grading-service.md); a managed service with no URL: the hub starts it as the grader
+# account, starts it again whenever it exits, and stops it with itself. Its own log file, so its
+# lines (one per submission) are not lost among the hub's.
+if S.get("grading_service", True):
+    WATCH_LOG = os.path.join(S["course_dir"], "service", "watch.log")
+    c.JupyterHub.services.append({
+        "name": f"{COURSE}-grading",
+        "command": ["/bin/sh", "-c", 'mkdir -p "${0%/*}" && exec "$@" >>"$0" 2>&1', WATCH_LOG,
+                    os.path.join(S["instructor_env"], "bin", "python"), "-m", "autograder",
+                    "watch", "--exchange", S["exchange"], "--course", S["course_dir"],
+                    "--jobs", str(S.get("grading_jobs", 2)),
+                    "--workers", str(S.get("grading_workers", 2))],
+        "user": S["grader"],
+        "cwd": S["course_dir"],
+        "environment": dict(_env(S["instructor_env"], S["instructor_config"]),
+                            MPLBACKEND="Agg", PYTHONUNBUFFERED="1"),
+    })

@@ -1,7 +1,8 @@
 """``python -m autograder watch``: grade each submission as it arrives, with feedback at once.
 
     python -m autograder watch --exchange ROOT [--course COURSE] [--poll S] [--jobs N]
-                               [--reference-seconds S] [--once] [--unsafe-no-isolation]
+                               [--workers W] [--reference-seconds S] [--once]
+                               [--unsafe-no-isolation]
 
 Watches ``ROOT/4f9/inbound`` (nbgrader's exchange), journals every submission in
 ``COURSE/service/journal.db``, and for each: collects it by the private-exchange rules, grades
@@ -49,6 +50,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add("--jobs", type=int, default=max(1, min(8, os.cpu_count() or 1)),
         help="sandboxes run in parallel for a submission's notebooks; default: the CPUs, at "
         "most 8 (here %(default)s)")
+    add("--workers", type=int, default=2,
+        help="submissions graded at once, each in a process of its own, sharing the --jobs "
+        "sandboxes (1: one at a time in the service's process); default: %(default)s")
     add("--timeout", type=float, default=10.0,
         help="time limit per case, in seconds; default: %(default)g")
     add("--memory-mb", type=int, default=2048,
@@ -122,7 +126,7 @@ def build(args) -> Service:
     db_url = None if args.no_gradebook else (args.db_url or default_db_url(args.course))
     return Service(Path(args.course), inbound, Path(args.exchange),
                    Journal(journal), policy, sources,
-                   opts, budgets, db_url)
+                   opts, budgets, db_url, workers=max(1, args.workers))
 
 
 def main(args: argparse.Namespace) -> int:

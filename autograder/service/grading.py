@@ -8,8 +8,10 @@ one transaction: :mod:`.journal`).
 
 from __future__ import annotations
 
+import contextlib
 import datetime as dt
 import errno
+import fcntl
 import hashlib
 import json
 import shutil
@@ -47,6 +49,9 @@ class Service:
     budgets: dict[str, float] = field(default_factory=dict)
     db_url: str | None = None           #: None: no gradebook
     uid_of: object = inbox.unix_uid
+    #: submissions graded at once, each in a worker process of its own (:mod:`.workers`);
+    #: 1: one at a time, in the service's own process
+    workers: int = 1
 
     @property
     def work(self) -> Path:
@@ -69,6 +74,12 @@ def process(svc: Service, row: Row) -> str:
     """Grade ``row``; what happened, one line. Never raises for one submission's sake: a
     full disk postpones it, a refused submission fails it, a grader error retries it."""
     svc.journal.start(row)
+    return process_started(svc, row)
+
+
+def process_started(svc: Service, row: Row) -> str:
+    """:func:`process` of a row already marked ``grading`` (by the service's main process,
+    before it hands the row to a worker process: :mod:`.workers`)."""
     folder = svc.work / str(row.id)
     try:
         ping_gradebook(svc.db_url)                  # down: no sandbox time spent in vain
@@ -86,7 +97,7 @@ def process(svc: Service, row: Row) -> str:
         return f"{row.student}: still being written; later"
     except OSError as exc:
         if exc.errno != errno.ENOSPC:
-            return _retry_or_fail(svc, row, exc)
+            return retry_or_fail(svc, row, exc)
         svc.journal.postpone(row, f"disk full: {exc}", DISK_RETRY, count_try=False)
         print(f"error: the disk is full ({exc}); submission {row.folder} is kept in the "
               f"queue and tried again in {DISK_RETRY:g} s", file=sys.stderr)
@@ -97,7 +108,7 @@ def process(svc: Service, row: Row) -> str:
     except Exception as exc:  # noqa: BLE001 - one submission never stops the service
         if _gradebook_unreachable(exc):
             return _wait_for_gradebook(svc, row, exc)
-        return _retry_or_fail(svc, row, exc)
+        return retry_or_fail(svc, row, exc)
 
 
 def _gradebook_unreachable(exc: BaseException) -> bool:
@@ -139,7 +150,9 @@ def _wait_for_gradebook(svc: Service, row: Row, exc: BaseException) -> str:
     return f"{row.student}: gradebook unreachable; kept and retried later"
 
 
-def _retry_or_fail(svc: Service, row: Row, exc: BaseException) -> str:
+def retry_or_fail(svc: Service, row: Row, exc: BaseException) -> str:
+    """``row`` back in the queue after an error (a minute later), or ``failed`` after
+    :data:`MAX_TRIES` tries; what happened, one line."""
     traceback.print_exception(type(exc), exc, exc.__traceback__)
     if row.tries + 1 >= MAX_TRIES:
         svc.journal.fail(row, f"{type(exc).__name__}: {exc}")
@@ -257,6 +270,20 @@ def _record(svc: Service, student: str, collected: Path, counting: list[str],
         return
     rows = [r for r in results if r.notebook in counting]
     kept = {k: v for k, v in subs.items() if k[1] in counting}
-    gradebook.sync(Batch(rows, kept, [student]), svc.sources,
-                   submitted=Path(svc.course) / "submitted", out=Path(svc.course),
-                   db_url=svc.db_url)
+    with _gradebook_turn(svc):
+        gradebook.sync(Batch(rows, kept, [student]), svc.sources,
+                       submitted=Path(svc.course) / "submitted", out=Path(svc.course),
+                       db_url=svc.db_url)
+
+
+@contextlib.contextmanager
+def _gradebook_turn(svc: Service):
+    """One worker process at a time writes the gradebook: two writers of a SQLite gradebook
+    would meet its lock (nbgrader's engine waits only seconds) and retry the whole submission."""
+    path = Path(svc.course) / "service" / "gradebook.lock"
+    with open(path, "a") as fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)

@@ -20,6 +20,8 @@ from ..course import ASSIGNMENT
 from ..outputs.gradebook import CARRIED_FILES
 
 SECRET_FILE = "submission_secret.txt"
+#: the exchange's feedback folder: rwx--x--x, nbgrader's ``ExchangeReleaseFeedback`` mode
+OUTBOUND_MODE = 0o711
 
 
 def write_atomic(path: Path, text: str, mode: int = 0o644) -> None:
@@ -51,7 +53,11 @@ def hand_out(course: Path, exchange: Path | None, collected: Path, student: str,
     if exchange is None or not secret.is_file():
         return None
     outbound = Path(exchange) / COURSE_ID / "feedback"
-    outbound.mkdir(parents=True, exist_ok=True)
+    if not outbound.is_dir():
+        outbound.mkdir(parents=True, exist_ok=True)
+        # as nbgrader's release_feedback makes it: students may enter it (to fetch their own
+        # page by its hashed name) but not list it (nor so read a classmate's)
+        os.chmod(outbound, OUTBOUND_MODE)
     target = outbound / f"{notebook_hash(secret=secret.read_text(), notebook_id=notebook)}.html"
     write_atomic(target, html)
     return target

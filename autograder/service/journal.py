@@ -11,7 +11,7 @@ grading consumed are written in the same transaction that marks the row ``done``
 Tables (documented for the class report, which reads ``attempts``):
 
 - ``submissions(id, folder, student, ctime_ns, noticed, state, tries, retry_at, error,
-  finished)``;
+  finished, started)`` (``started``: when its last grading began, epoch s);
 - ``notebooks(submission_id, student, notebook, time, digest, graded, score, max_score)``: one
   row per notebook a submission held; ``graded`` 0 when it was unchanged or over the budget;
 - ``attempts(submission_id, student, notebook, item, time, score, max_score, status)``: one
@@ -31,7 +31,7 @@ CREATE TABLE IF NOT EXISTS submissions (
     id INTEGER PRIMARY KEY, folder TEXT UNIQUE NOT NULL, student TEXT NOT NULL,
     ctime_ns INTEGER NOT NULL, noticed REAL NOT NULL, state TEXT NOT NULL DEFAULT 'queued',
     tries INTEGER NOT NULL DEFAULT 0, retry_at REAL NOT NULL DEFAULT 0, error TEXT DEFAULT '',
-    finished REAL NOT NULL DEFAULT 0);
+    finished REAL NOT NULL DEFAULT 0, started REAL NOT NULL DEFAULT 0);
 CREATE TABLE IF NOT EXISTS notebooks (
     submission_id INTEGER NOT NULL, student TEXT NOT NULL, notebook TEXT NOT NULL,
     time REAL NOT NULL, digest TEXT NOT NULL, graded INTEGER NOT NULL,
@@ -79,6 +79,9 @@ class Journal:
         self.db.execute("PRAGMA journal_mode=WAL")
         self.db.execute("PRAGMA synchronous=FULL")
         self.db.executescript(SCHEMA)
+        columns = {c[1] for c in self.db.execute("PRAGMA table_info(submissions)")}
+        if "started" not in columns:    # a journal written before the column existed
+            self.db.execute("ALTER TABLE submissions ADD COLUMN started REAL NOT NULL DEFAULT 0")
 
     def close(self) -> None:
         self.db.close()
@@ -104,9 +107,10 @@ class Journal:
     def next_ready(self, now: float | None = None) -> Row | None:
         """The next submission to grade: round-robin over students (the one served longest
         ago, or never, first), each student's own submissions in the order the exchange saw
-        them. A student's later submissions wait behind their own, never the class's: also
-        behind an earlier one postponed for a retry (a gradebook or a disk that failed it), or
-        the later would be graded first and the earlier would then replace it as the last."""
+        them. A student's later submissions wait behind their own, never the class's: none
+        is handed out while another of the same student is being graded, nor while an
+        earlier one of theirs is postponed for a retry (a gradebook or a disk that failed it),
+        or the later would be graded first and the earlier would then replace it as the last."""
         now = time.time() if now is None else now
         cur = self.db.execute(
             "SELECT s.id, s.folder, s.student, s.ctime_ns, s.state, s.tries FROM submissions s "
@@ -114,15 +118,16 @@ class Journal:
             "           GROUP BY student) d "
             "ON d.student = s.student "
             "WHERE s.state='queued' AND s.retry_at <= ? AND NOT EXISTS (SELECT 1 FROM "
-            "submissions e WHERE e.student = s.student AND e.state IN ('queued', 'grading') "
-            "AND (e.ctime_ns < s.ctime_ns OR (e.ctime_ns = s.ctime_ns AND e.id < s.id))) "
+            "submissions e WHERE e.student = s.student AND (e.state = 'grading' OR "
+            "(e.state = 'queued' AND (e.ctime_ns < s.ctime_ns OR "
+            "(e.ctime_ns = s.ctime_ns AND e.id < s.id))))) "
             "ORDER BY COALESCE(d.last, 0), s.ctime_ns, s.id LIMIT 1", (now,))
         found = cur.fetchone()
         return Row(*found) if found else None
 
     def start(self, row: Row) -> None:
-        self.db.execute("UPDATE submissions SET state='grading', tries=tries+1 WHERE id=?",
-                        (row.id,))
+        self.db.execute("UPDATE submissions SET state='grading', tries=tries+1, started=? "
+                        "WHERE id=?", (time.time(), row.id))
 
     def postpone(self, row: Row, why: str, delay: float, count_try: bool = True) -> None:
         """Back to the queue, not before ``delay`` seconds (e.g. a full disk). With

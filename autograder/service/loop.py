@@ -1,10 +1,11 @@
 """The service loop: notice new submissions, grade the next one, repeat.
 
 Each round lists the exchange's inbound (:func:`~.inbox.scan`), journals what is new (a
-refused folder is journalled ``failed`` with its reason), and grades queued submissions one at a
-time in the journal's fair order (:meth:`~.journal.Journal.next_ready`: round-robin over
-students). Polling costs one ``listdir`` of the inbound and an ``lstat`` walk of each folder not
-yet journalled, every ``poll`` seconds (default 2).
+refused folder is journalled ``failed`` with its reason), and grades queued submissions in the
+journal's fair order (:meth:`~.journal.Journal.next_ready`: round-robin over students): one at a
+time in this process, or several at once in worker processes (:mod:`.workers`). Polling costs
+one ``listdir`` of the inbound and an ``lstat`` walk of each folder not yet journalled, every
+``poll`` seconds (default 2).
 """
 
 from __future__ import annotations
@@ -42,14 +43,44 @@ def drain(svc: Service, limit: int | None = None, now: float | None = None) -> l
 
 
 def run(svc: Service, poll: float = 2.0, rounds: int | None = None) -> None:
-    """Serve until interrupted (or for ``rounds`` rounds): recover, then notice and drain."""
+    """Serve until interrupted (or for ``rounds`` rounds): recover, then notice and drain.
+
+    With ``svc.workers`` above 1, submissions are graded in worker processes, several at a
+    time (:func:`run_parallel`)."""
     recovered = svc.journal.recover()
     if recovered:
         print(f"resuming {recovered} submission(s) a stopped service was grading",
               file=sys.stderr)
+    if svc.workers > 1:
+        run_parallel(svc, poll, rounds)
+        return
     done = 0
     while rounds is None or done < rounds:
         notice(svc)
         if not drain(svc):
             time.sleep(poll)
         done += 1
+
+
+def run_parallel(svc: Service, poll: float = 2.0, rounds: int | None = None) -> None:
+    """Serve with up to ``svc.workers`` submissions in flight (:class:`~.workers.Workers`),
+    noticing new submissions between starts. A round ends when nothing is ready and nothing
+    is in flight (``rounds=1``: grade what is there, then stop)."""
+    from .workers import Workers
+
+    pool = Workers(svc)
+    idle = 0
+    try:
+        while rounds is None or idle < rounds:
+            notice(svc)
+            pool.fill()
+            if pool.busy:
+                pool.wait(poll)
+            else:
+                idle += 1
+                if rounds is None or idle < rounds:
+                    time.sleep(poll)
+            for line in pool.reap():
+                print(line, file=sys.stderr)
+    finally:
+        pool.stop()

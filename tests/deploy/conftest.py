@@ -14,6 +14,7 @@ Skipped, with the reason, when not root, or when Debian's ``configurable-http-pr
 
 from __future__ import annotations
 
+import contextlib
 import os
 import secrets
 import shutil
@@ -25,8 +26,8 @@ from pathlib import Path
 
 import pytest
 
-from hubtools import (ARTIFACTS, CHROMIUM, ENVS, GRADER, INSTRUCTOR, PREFIX, STUDENTS,
-                      missing_for_accounts)
+from hubtools import (ARTIFACTS, BURST, CHROMIUM, ENVS, GRADER, GRADING_PREFIX, INSTRUCTOR, LONE,
+                      PREFIX, STUDENTS, missing_for_accounts)
 
 import hub  # deploy/hub.py (hubtools puts deploy/ on sys.path)
 
@@ -55,8 +56,8 @@ def _remove_account(name: str) -> None:
     subprocess.run(["userdel", "--remove", name], capture_output=True)
 
 
-def _remove_accounts(settings: hub.HubSettings) -> None:
-    for name in (*STUDENTS, INSTRUCTOR, GRADER):
+def _remove_accounts(settings: hub.HubSettings, accounts: tuple[str, ...]) -> None:
+    for name in accounts:
         _remove_account(name)
     for group in (settings.students_group, settings.instructors_group):
         subprocess.run(["groupdel", group], capture_output=True)
@@ -86,9 +87,13 @@ def _wait_for_hub(proc, url: str, log: Path, timeout: float = 120) -> None:
     pytest.fail(f"the hub did not come up:\n{log.read_text()[-4000:]}")
 
 
-@pytest.fixture(scope="module")
-def course_hub():
-    """A running hub: ``dict(url, settings, passwords, log)``; everything removed afterwards."""
+@contextlib.contextmanager
+def running_hub(prefix: str = PREFIX, students: tuple[str, ...] = STUDENTS,
+                instructor: str = INSTRUCTOR, grader: str = GRADER, log_name: str = "hub.log",
+                **options):
+    """A running hub whose accounts are named from ``prefix``: ``dict(url, settings, passwords,
+    log)``; everything removed afterwards (skips, with the reason, where it cannot run).
+    ``options``: more :class:`hub.HubSettings` (e.g. ``grading_service=False``)."""
     reason = _skip_reason()
     if reason:
         pytest.skip(reason)
@@ -98,17 +103,19 @@ def course_hub():
     state = Path(tempfile.mkdtemp(prefix="4f9-hub-", dir="/tmp"))
     os.chmod(state, 0o755)
     settings = hub.HubSettings(state=str(state), port=hub.free_port(), course_id="4f9",
-                               grader=GRADER, students_group=f"{PREFIX}-students",
-                               instructors_group=f"{PREFIX}-instructors", envs=str(ENVS))
-    _remove_accounts(settings)  # a run killed half-way leaves them behind
-    passwords = {name: secrets.token_urlsafe(12) for name in (*STUDENTS, INSTRUCTOR)}
-    log_path = ARTIFACTS / "hub.log"
+                               grader=grader, students_group=f"{prefix}-students",
+                               instructors_group=f"{prefix}-instructors", envs=str(ENVS),
+                               **options)
+    accounts = (*students, instructor, grader)
+    _remove_accounts(settings, accounts)  # a run killed half-way leaves them behind
+    passwords = {name: secrets.token_urlsafe(12) for name in (*students, instructor)}
+    log_path = ARTIFACTS / log_name
     proc = None
     try:
         hub.prepare(settings, studentenv.BUILD_CACHE)
-        for name in STUDENTS:
+        for name in students:
             hub.ensure_user(name, [settings.students_group], passwords[name])
-        hub.ensure_user(INSTRUCTOR, [settings.instructors_group], passwords[INSTRUCTOR])
+        hub.ensure_user(instructor, [settings.instructors_group], passwords[instructor])
         cmd, env = hub.hub_command(settings)
         log = open(log_path, "w")
         proc = subprocess.Popen(cmd, env=env, cwd=settings.paths["hub_dir"], stdout=log,
@@ -118,11 +125,30 @@ def course_hub():
         yield {"url": url, "settings": settings, "passwords": passwords, "log": log_path}
     finally:
         if proc is not None:
-            proc.terminate()  # the hub stops the users' servers and the formgrader service
+            proc.terminate()  # the hub stops the users' servers and its services
             try:
                 proc.wait(timeout=30)
             except subprocess.TimeoutExpired:
                 proc.kill()
         _stop_orphaned_proxy(Path(settings.paths["hub_dir"]) / "proxy.pid")
-        _remove_accounts(settings)
+        _remove_accounts(settings, accounts)
         shutil.rmtree(state, ignore_errors=True)
+
+
+@pytest.fixture(scope="module")
+def course_hub():
+    """A running hub: ``dict(url, settings, passwords, log)``; everything removed afterwards.
+
+    Its grading service is switched off: the term test walks the batch term (collect, grade,
+    mark, hand back after the deadline), which the service's own pages and gradebook writes
+    would race; the service has its hub in ``grading_hub``."""
+    with running_hub(grading_service=False) as running:
+        yield running
+
+
+@pytest.fixture(scope="module")
+def grading_hub():
+    """A running hub with the grading service, three lone students and 30 for the burst."""
+    with running_hub(GRADING_PREFIX, (*LONE, *BURST), f"{GRADING_PREFIX}prof",
+                     f"{GRADING_PREFIX}grader", "hub-grading.log") as running:
+        yield running

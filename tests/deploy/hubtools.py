@@ -20,6 +20,11 @@ PREFIX = "t4f9"
 STUDENTS = (f"{PREFIX}ana", f"{PREFIX}ben")
 INSTRUCTOR = f"{PREFIX}prof"
 GRADER = f"{PREFIX}grader"
+#: the grading service's hub (test_hub_grading.py): a prefix of its own, so it never removes
+#: the term test's accounts; three students alone, then a class of 30 in a burst
+GRADING_PREFIX = "t4g"
+LONE = tuple(f"{GRADING_PREFIX}{n}" for n in ("ana", "ben", "cat"))
+BURST = tuple(f"{GRADING_PREFIX}b{i:02d}" for i in range(1, 31))
 
 
 def missing_for_accounts(what: str, tools: tuple[tuple[str, str], ...]) -> str | None:
