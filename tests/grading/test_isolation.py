@@ -770,3 +770,74 @@ def test_the_notebook_has_one_hard_time_limit(mode):
     assert kinds(runs["second"]) == [K.NOT_RUN] * 30
     assert "the notebook used up its time" in runs["second"].outcomes[0].message
     assert "the notebook used up its time" in runs["first"].outcomes[-1].message
+
+
+# ------------------------------------------------------------------------------------------
+# a worker holds only the case it is running
+
+#: Looks for case markers where student code can: every object the interpreter tracks (the
+#: frames' locals included), the job file and the scratch folder (``reachable``), and raw memory
+#: (every writable mapping of the process, read through ``__array_interface__``).
+SPY = r"""
+import gc, os, re, sys
+PATTERN = re.compile(rb"MARK[-][a-z][-][0-9]")
+
+class _Raw:
+    def __init__(self, address, n):
+        self.__array_interface__ = {"shape": (n,), "typestr": "|u1", "data": (address, True),
+                                    "version": 3}
+
+def _markers(data):
+    return {m.group().decode() for m in PATTERN.finditer(data)}
+
+def _reachable():
+    found = set()
+    for obj in gc.get_objects():
+        items = obj.values() if type(obj) is dict else obj if type(obj) in (list, tuple) else ()
+        for v in items:
+            if type(v) is str:
+                found |= _markers(v.encode())
+    with open(sys.argv[sys.argv.index("--job") + 1], "rb") as f:
+        found |= _markers(f.read())
+    for entry in os.listdir("."):
+        found |= _markers(entry.encode())
+        if os.path.isfile(entry):
+            with open(entry, "rb") as f:
+                found |= _markers(f.read())
+    return found
+
+def _raw():
+    found = set()
+    with open("/proc/self/maps") as f:
+        maps = f.read().splitlines()
+    for line in maps:
+        parts = line.split()
+        if not parts[1].startswith("rw") or (len(parts) > 5 and parts[5] == "[vvar]"):
+            continue
+        lo, hi = (int(x, 16) for x in parts[0].split("-"))
+        found |= _markers(bytes(np.asarray(_Raw(lo, hi - lo))))
+    return found
+
+def NAME(marker):
+    with open("stash-" + marker, "w") as f:     # for a later worker to find
+        f.write(marker)
+    seen, raw = _reachable(), _raw()
+    return [len({m for m in seen if m[5] != marker[5]}),
+            len({m for m in seen | raw if m[5] == marker[5] and m > marker}),
+            int(marker in seen and marker in raw)]
+"""
+
+
+def test_a_worker_holds_no_other_case_than_its_own(mode):
+    """Each case's inputs reach the worker only when it is due: nothing of a later case of the
+    same name (not even in raw memory), and nothing of another name that student code can
+    reach (objects, frames, the job file, the scratch folder)."""
+    if mode is not Mode.ISOLATED:
+        pytest.skip("the scratch folder is emptied between workers only in the sandbox")
+    names = [fn(n, SPY.replace("NAME", n), cases=[(f"MARK-{n}-{k}",) for k in range(4)])
+             for n in ("f", "g")]
+    runs = run(mode, *names, limits=Limits(case_timeout=20.0, load_timeout=10.0))
+    for n in ("f", "g"):
+        assert kinds(runs[n]) == [K.RETURNED] * 4, [o.message for o in runs[n].outcomes]
+        # no marker of the other name, none of a later case of its own; its own is found
+        assert [o.value for o in runs[n].outcomes] == [[0, 0, 1]] * 4, n
