@@ -1,13 +1,14 @@
 """The supervisor: the sandbox's first process, which never runs student code.
 
 For each graded name it forks a worker (:mod:`.worker`), hands it one case at a time (read from
-the cases file's descriptor when the case is due: the worker never holds a case it is not
-running, nor another name's), forwards the worker's records to the ONE channel the grader reads, restarts a crashed or hung worker for the remaining cases (at most
-``max_launches`` processes per name) under deadlines of its own that no record of a worker can
-move (a fixed one per case, a hard end per name and per notebook, ``job_timeout``), and kills
-every leftover process and empties the scratch folder before each worker (so nothing one
-worker saw reaches the next). When it is PID 1 of its own PID namespace (the
-sandbox), ``kill(-1, SIGKILL)`` cannot reach it, and clears everything else.
+the cases file's descriptor when the case is due: the worker never holds a case it is not yet
+running, nor another name's), forwards the worker's records to the ONE channel the grader
+reads, restarts a crashed or hung worker for the remaining cases (at most ``max_launches``
+processes per name) under deadlines of its own that no record of a worker can move (a fixed one
+per case, a hard end per name and per notebook, ``job_timeout``), and kills every leftover
+process and empties the scratch folder before each worker (so nothing one worker saw reaches
+the next). When it is PID 1 of its own PID namespace (the sandbox), ``kill(-1, SIGKILL)``
+cannot reach it, and clears everything else.
 
 Standard library only: this module runs inside the sandbox (the grader imports it for
 :func:`name_budget`).

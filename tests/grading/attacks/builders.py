@@ -29,7 +29,7 @@ from pathlib import Path
 from string import Template
 
 from gradingtools import (append_cell, cases_of, cell_index, expect_all, expect_full_marks,
-                          model_version, points_of, release_version, target_of)
+                          model_version, release_version, target_of)
 
 from autograder.exercises import REGISTRY
 
