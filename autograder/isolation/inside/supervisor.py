@@ -6,8 +6,8 @@ running, nor another name's), forwards the worker's records to the ONE channel t
 reads, restarts a crashed or hung worker for the remaining cases (at most ``max_launches``
 processes per name) under deadlines of its own that no record of a worker can move (a fixed one
 per case, a hard end per name and per notebook, ``job_timeout``), and kills every leftover
-process and empties the scratch folder before each worker (so nothing one worker saw reaches
-the next). When it is PID 1 of its own PID namespace (the sandbox), ``kill(-1, SIGKILL)``
+process and empties the scratch folder before each name's first worker (so nothing a worker
+saw reaches another name's). When it is PID 1 of its own PID namespace (the sandbox), ``kill(-1, SIGKILL)``
 cannot reach it, and clears everything else.
 
 Standard library only: this module runs inside the sandbox (the grader imports it for
@@ -91,7 +91,7 @@ class NameSupervisor:
 
     ``fds``: the channel to the grader and the cases file (each case's frame at the ``at`` and
     ``len`` of its entry in ``nj["cases"]``); ``scratch``: the folder emptied before each
-    worker starts."""
+    name's first worker starts."""
 
     def __init__(self, nj: dict, ns: dict, limits: dict, policy: Policy, fds: tuple[int, int],
                  job_deadline: float = float("inf"), bpf: bytes = b"", scratch: str = ""):
@@ -146,7 +146,10 @@ class NameSupervisor:
     def launch(self) -> bool:
         """One worker process; True when another should continue with the remaining cases."""
         kill_leftovers(self.pid)
-        empty_folder(self.scratch)
+        if self.launches == 0:
+            # a new name: nothing an earlier name's worker stored is left (a restart keeps it:
+            # what it finds is of cases already run, and hidden cases run last)
+            empty_folder(self.scratch)
         self.launches += 1
         rfd, wfd = os.pipe()
         crfd, cwfd = os.pipe()
