@@ -822,7 +822,7 @@ def NAME(marker):
     with open("stash-" + marker, "w") as f:     # for a later worker to find
         f.write(marker)
     seen, raw = _reachable(), _raw()
-    return [len({m for m in seen if m[5] != marker[5]}),
+    return [len({m for m in seen | raw if m[5] != marker[5]}),
             len({m for m in seen | raw if m[5] == marker[5] and m > marker}),
             int(marker in seen and marker in raw)]
 """
@@ -830,8 +830,8 @@ def NAME(marker):
 
 def test_a_worker_holds_no_other_case_than_its_own(mode):
     """Each case's inputs reach the worker only when it is due: nothing of a later case of the
-    same name (not even in raw memory), and nothing of another name that student code can
-    reach (objects, frames, the job file, the scratch folder)."""
+    same name, and nothing of another name, in objects, frames, the job file, the scratch
+    folder (names and contents) or raw memory."""
     if mode is not Mode.ISOLATED:
         pytest.skip("the scratch folder is emptied between workers only in the sandbox")
     names = [fn(n, SPY.replace("NAME", n), cases=[(f"MARK-{n}-{k}",) for k in range(4)])

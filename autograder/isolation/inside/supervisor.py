@@ -67,14 +67,28 @@ def kill_leftovers(worker_pid: int | None) -> None:
 
 
 def empty_folder(path: str) -> None:
-    """Remove everything inside ``path`` (the sandbox's private scratch; ``""``: nothing)."""
+    """Remove everything inside ``path`` (the sandbox's private scratch; ``""``: nothing), in
+    a child process: the names a worker chose (they may spell a case's inputs) never enter
+    this process's memory, which every later worker inherits."""
     if not path:
         return
     try:
-        entries = os.listdir(path)
+        pid = os.fork()
     except OSError:
         return
-    for entry in entries:
+    if pid == 0:
+        try:
+            _remove_inside(path)
+        finally:
+            os._exit(0)
+    try:
+        os.waitpid(pid, 0)
+    except ChildProcessError:
+        pass
+
+
+def _remove_inside(path: str) -> None:
+    for entry in os.listdir(path):
         full = os.path.join(path, entry)
         try:
             if os.path.isdir(full) and not os.path.islink(full):
