@@ -841,3 +841,21 @@ def test_a_worker_holds_no_other_case_than_its_own(mode):
         assert kinds(runs[n]) == [K.RETURNED] * 4, [o.message for o in runs[n].outcomes]
         # no marker of the other name, none of a later case of its own; its own is found
         assert [o.value for o in runs[n].outcomes] == [[0, 0, 1]] * 4, n
+
+
+def test_the_job_document_holds_no_case_inputs():
+    """The file bound into the sandbox says where each case is, never what it is: the inputs
+    are frames of the cases file, which only the supervisor's descriptor reaches."""
+    from autograder.isolation import runner
+
+    job = NotebookJob("j", SETUP, [fn("f", "def f(x):\n    return x\n",
+                                      cases=[(0.123456789,), (np.array([9.87654321]),)])])
+    doc, cases = runner._job_contents(job, Limits(), False)
+    assert "0.123456789" not in json.dumps(doc) and "args" not in json.dumps(doc)
+    got = []
+    for entry in doc["names"][0]["cases"]:
+        data = cases[entry["at"]:entry["at"] + entry["len"]]
+        rec = json.loads(data[wire.FRAME.size:])
+        assert wire.FRAME.unpack_from(data)[0] == entry["len"] - wire.FRAME.size
+        got.append(wire.decode_value(rec["args"], wire.Budget(1 << 20)))
+    assert got[0] == (0.123456789,) and got[1][0].tolist() == [9.87654321]
