@@ -39,7 +39,8 @@ def _judged(name: str, func, seed: int) -> list[tuple[object, CaseRecord]]:
     for i, case in enumerate(ex.draw_cases(np.random.default_rng(seed))):
         expected = ex.expected(case) if case.raises is None else None
         verdict, reason = judge_case(ex, case, expected, call_in_process(func, case, i))
-        out.append((case, CaseRecord(i, case.label, bool(case.visible), verdict, reason)))
+        out.append((case, CaseRecord(i, case.label, bool(case.visible), verdict, reason,
+                                     raises=case.raises.__name__ if case.raises else "")))
     return out
 
 

@@ -65,7 +65,11 @@ def judge_case(ex: Exercise, case, expected, outcome: CaseOutcome) -> tuple[Verd
     """``(verdict, reason)`` of one case of a graded function (Q-independent: any exercise)."""
     kind = OutcomeKind(outcome.kind)
     if kind is OutcomeKind.RETURNED:
-        return _judge_returned(ex, case, expected, outcome.value)
+        verdict, reason = _judge_returned(ex, case, expected, outcome.value)
+        if verdict is not Verdict.PASS and case.raises is None \
+                and form_of(outcome.value)[0] != form_of(expected)[0]:
+            reason = f"returned {form_words(outcome.value)}, expected {form_words(expected)}"
+        return verdict, reason
     if kind is OutcomeKind.RAISED:
         return _judge_raised(case, outcome)
     if kind is OutcomeKind.TIMEOUT:
@@ -138,6 +142,41 @@ def judge_item(ex: Exercise, outcome: CaseOutcome, student: str | None) -> tuple
     return judge_choice(ex, outcome, student)
 
 
+def form_of(value) -> tuple:
+    """What a value is, without what it holds: ``("number",)`` (a float, an int, a 0-d
+    array), ``("bool",)``, ``("array", shape)``, ``("tuple", forms...)`` (lists alike) or the
+    type's name. A graded function's returned value is shown on the feedback page only when its
+    form is the expected answer's (:func:`same_form`), so a returned text cannot carry
+    anything there."""
+    if isinstance(value, (bool, np.bool_)):
+        return ("bool",)
+    if isinstance(value, np.ndarray) and value.ndim:
+        return ("array", tuple(int(n) for n in value.shape))
+    if isinstance(value, (int, float, np.integer, np.floating, np.ndarray)):
+        return ("number",)
+    if isinstance(value, (tuple, list)):
+        return ("tuple", *(form_of(v) for v in value))
+    return (type(value).__name__,)
+
+
+def same_form(expected, received) -> bool:
+    """``received`` has the type and shape of ``expected`` (:func:`form_of`)."""
+    try:
+        return form_of(expected) == form_of(received)
+    except Exception:  # noqa: BLE001 - an odd value is not of the expected form
+        return False
+
+
+def form_words(value) -> str:
+    """:func:`form_of` in words: "a str", "an array of shape (3,)", "a tuple of 2"."""
+    form = form_of(value)
+    if form[0] == "array":
+        return f"an array of shape {form[1]}"
+    if form[0] == "tuple":
+        return f"a tuple of {len(form) - 1}"
+    return "None" if value is None else ("an " if form[0][:1] in "aeiou" else "a ") + form[0]
+
+
 class _NoCase:
     raises = None
 
@@ -164,8 +203,10 @@ def call_in_process(func, case, index: int = 0) -> CaseOutcome:
 
 def summarise(records: list[CaseRecord], points: float,
               kind: CellKind = CellKind.FUNCTION) -> tuple[float, Status, str]:
-    """``(score, status, message)`` of a test cell: ``points × passed / cases``; the status
-    names the most serious failure (:data:`~autograder.model.SEVERITY`)."""
+    """``(score, status, message)`` of a test cell: ``points × passed / cases``, where a
+    function's bad-input cases count only once one of its ordinary cases passes
+    (:func:`bad_input_withheld`); the status names the most serious failure
+    (:data:`~autograder.model.SEVERITY`)."""
     n = len(records)
     if n == 0:
         return 0.0, Status.GRADER_ERROR, "no cases could be run (instructor: check the registry)"
@@ -178,7 +219,8 @@ def summarise(records: list[CaseRecord], points: float,
         ref = next(r for r in records if r.verdict is Verdict.REFERENCE_USED)
         return 0.0, Status.REFERENCE_USED, (f"{clip(ref.reason, 160)}: a graded function must "
                                             "be your own work, so this test scores 0")
-    score = round(points * passed / n, 6)
+    withheld = bad_input_withheld(records) if kind is CellKind.FUNCTION else 0
+    score = round(points * (passed - withheld) / n, 6)
     if kind in (CellKind.CHOICE, CellKind.VALUE):
         return score, _status_of(counts) if counts else Status.OK, \
             ("correct" if not counts else clip(records[0].reason, 300))
@@ -186,6 +228,9 @@ def summarise(records: list[CaseRecord], points: float,
         return score, Status.OK, f"all {n} cases passed"
     parts = [f"{c} {VERDICT_WORDS[v]}" for v, c in sorted(counts.items(), key=lambda x: -x[1])]
     msg = f"{passed} of {n} cases passed ({', '.join(parts)})"
+    if withheld:
+        msg += (f"; the {withheld} bad-input case(s) it passed (raising ValueError) count only "
+                "once it also answers an ordinary case right, so this test scores 0")
     first = next((r for r in records if r.verdict is not Verdict.PASS and r.visible), None)
     if first is not None:
         msg += f"; e.g. {first.label or 'a visible case'}: {clip(first.reason, 200)}"
@@ -193,6 +238,19 @@ def summarise(records: list[CaseRecord], points: float,
         first = next(r for r in records if r.verdict is not Verdict.PASS)
         msg += f"; e.g. a hidden case: {VERDICT_WORDS[first.verdict]}"
     return score, _status_of(counts), msg
+
+
+def bad_input_withheld(records: list[CaseRecord]) -> int:
+    """How many passed cases of a graded function do not count: its bad-input cases (those
+    where raising is the right answer, ``record.raises``) count only once it passes at least
+    one ordinary case of the same grading, so raising ``ValueError`` on every input earns
+    nothing (Q1-Q6: the "bad input raises ``ValueError``" convention of every notebook).
+
+    A function whose cases all must raise keeps them (the rule needs an ordinary case)."""
+    ordinary = [r for r in records if not r.raises]
+    if not ordinary or any(r.verdict is Verdict.PASS for r in ordinary):
+        return 0
+    return sum(r.verdict is Verdict.PASS for r in records if r.raises)
 
 
 def _status_of(counts: dict[Verdict, int]) -> Status:
@@ -297,8 +355,9 @@ def judge_cell(ev: CellEvidence) -> CellVerdict:
     3. Cases that used the reference or that the sandbox refused keep their summary.
     4. A cell that earned nothing and whose answer is absent or malformed gets the status and
        advice for that (:func:`unanswered_or_broken`: unanswered, wrong signature, not defined).
-    5. Otherwise the cases' summary (:func:`summarise`): ``points × passed / cases``, the status
-       of the most serious failure.
+    5. Otherwise the cases' summary (:func:`summarise`): ``points × passed / cases`` (a
+       function's bad-input cases counted only once an ordinary case passes), the status of
+       the most serious failure.
 
     The message then carries the notes (and, revealed, whose numbers a wrong item fits).
     """

@@ -184,6 +184,9 @@ class CaseRecord:
     received: Any = None
     raises: str = ""                #: the exception a bad input must raise, by name
     printed: str = ""
+    #: the returned value is kept (False: it was not of the expected answer's type and shape,
+    #: so nothing of it is shown)
+    shown: bool = True
 
 
 @dataclass(frozen=True)

@@ -33,6 +33,13 @@ CASES_PER_EXERCISE = 6
 #: probe counts as "no answer", instead of the machine's OOM killer (seen: 20 GB, SIGKILL)
 MEMORY_LIMIT = 8 << 30
 
+#: CPU seconds one call may take (``ITIMER_PROF``: the process's own CPU time, so a busy
+#: machine never stops a reference early; each of them answers in milliseconds)
+CPU_BUDGET = 1.0
+#: wall seconds one call may take, a backstop only for a callable that blocks without using
+#: CPU (a sleep, a read); far beyond any reference's time however busy the machine
+WALL_BACKSTOP = 30.0
+
 STUDENT_SIDE = r'''
 import importlib, inspect, io, os, pickle, pkgutil, resource, signal, sys, warnings
 resource.setrlimit(resource.RLIMIT_AS, (int(os.environ["PROBE_MEMORY_LIMIT"]),) * 2)
@@ -50,7 +57,10 @@ class _Slow(BaseException):
 def _alarm(*_):
     raise _Slow()
 
+signal.signal(signal.SIGPROF, _alarm)
 signal.signal(signal.SIGALRM, _alarm)
+cpu_budget = float(os.environ["PROBE_CPU_BUDGET"])
+wall_backstop = float(os.environ["PROBE_WALL_BACKSTOP"])
 
 def _floats(x):
     try:
@@ -114,12 +124,14 @@ for module in modules:
             for args, kwargs, expected in rows:
                 tried += 1
                 stdout, sys.stdout = sys.stdout, io.StringIO()
-                signal.setitimer(signal.ITIMER_REAL, 0.3)
+                signal.setitimer(signal.ITIMER_PROF, cpu_budget)
+                signal.setitimer(signal.ITIMER_REAL, wall_backstop)
                 try:
                     got = fn(*pickle.loads(args), **pickle.loads(kwargs))
                 except BaseException:
                     got = _Slow
                 finally:
+                    signal.setitimer(signal.ITIMER_PROF, 0)
                     signal.setitimer(signal.ITIMER_REAL, 0)
                     sys.stdout = stdout
                 if got is _Slow or not _screen(expected, got):
@@ -175,7 +187,8 @@ def find_answers(python: str | Path, workdir: Path, env: dict | None = None,
             for name, rows in cases.items()}
     (workdir / "cases.pkl").write_bytes(pickle.dumps(sent))
     env = dict(os.environ if env is None else env, MPLBACKEND="Agg",
-               PROBE_MEMORY_LIMIT=str(MEMORY_LIMIT))
+               PROBE_MEMORY_LIMIT=str(MEMORY_LIMIT), PROBE_CPU_BUDGET=str(CPU_BUDGET),
+               PROBE_WALL_BACKSTOP=str(WALL_BACKSTOP))
     proc = subprocess.run([str(python), "-I", "-c", STUDENT_SIDE, "cases.pkl", "found.pkl",
                            package, *map(str, path)],
                           cwd=workdir, env=env, capture_output=True, text=True,

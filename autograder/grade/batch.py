@@ -359,10 +359,14 @@ def _records(ex, drawn: list[DrawnCase], run: NameRun, show: bool = True,
         verdict, reason = judging.judge_case(ex, d.case, d.expected, outcome)
         if verdict is Verdict.REFERENCE_USED and not (show or d.case.visible):
             reason = f"used {OFF_LIMITS}"
-        received = outcome.value if verdict in (Verdict.PASS, Verdict.WRONG_VALUE,
-                                                Verdict.WRONG_SHAPE) else None
+        # a value is shown only in the answer's own form: no text or other shape can carry
+        # anything onto the feedback page
+        returned = verdict in (Verdict.PASS, Verdict.WRONG_VALUE, Verdict.WRONG_SHAPE)
+        shown = returned and judging.same_form(d.expected, outcome.value)
         records.append(CaseRecord(
             i, d.case.label, bool(d.case.visible), verdict, reason, args=tuple(d.case.args),
-            kwargs=dict(d.case.kwargs), expected=d.expected, received=received,
-            raises=d.case.raises.__name__ if d.case.raises else "", printed=outcome.printed))
+            kwargs=dict(d.case.kwargs), expected=d.expected,
+            received=outcome.value if shown else None,
+            raises=d.case.raises.__name__ if d.case.raises else "", printed=outcome.printed,
+            shown=shown or not returned))
     return records

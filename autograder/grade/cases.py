@@ -75,10 +75,13 @@ class DrawnCase:
 
 
 def draw(ex: Exercise, seed: int) -> list[DrawnCase]:
-    """The exercise's cases from ``seed`` with their expected answers; a case whose reference
-    fails (a registry problem) is skipped with a warning."""
+    """The exercise's cases from ``seed`` with their expected answers, visible ones first (the
+    sandbox runs them in this order, so a function has seen no hidden input while its returned
+    values are still shown); a case whose reference fails (a registry problem) is skipped with
+    a warning."""
     drawn = []
-    for case in ex.draw_cases(np.random.default_rng(seed)):
+    cases = ex.draw_cases(np.random.default_rng(seed))
+    for case in sorted(cases, key=lambda c: not c.visible):
         expected = None
         if case.raises is None:
             try:

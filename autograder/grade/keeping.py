@@ -40,7 +40,7 @@ def kept(r: CaseRecord, reveal: bool) -> CaseRecord:
     return CaseRecord(r.index, r.label, r.visible, r.verdict, r.reason,
                       args=keep(tuple(r.args)), kwargs={k: keep(v) for k, v in r.kwargs.items()},
                       expected=keep(r.expected), received=keep(r.received), raises=r.raises,
-                      printed=judging.clip_block(r.printed, 2000))
+                      printed=judging.clip_block(r.printed, 2000), shown=r.shown)
 
 
 def printed(run: NameRun, records: list[CaseRecord], reveal: bool) -> str:

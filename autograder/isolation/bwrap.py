@@ -152,10 +152,11 @@ def interpreter_mounts() -> list[str]:
     return args
 
 
-def bwrap_command(job_file: str, allowlist_dir: str, program_dir: str, channel_fd: int,
+def bwrap_command(job_file: str, allowlist_dir: str, program_dir: str, fds: tuple[int, int],
                   scratch_mb: int, uid: int | None) -> list[str]:
     """The command that runs the child (the sandbox program of ``program_dir``, bound read-only)
-    in a fresh sandbox (as ``uid`` when root)."""
+    in a fresh sandbox (as ``uid`` when root); ``fds``: the channel's write end and the cases
+    file, inherited (the cases are in no file the sandbox can open)."""
     argv = [BWRAP, *namespace_args(), "--ro-bind", "/usr", "/usr", *system_links(),
             *interpreter_mounts(), "--perms", "0755", "--dir", os.path.dirname(PROGRAM),
             "--perms", "0755", "--dir", SITE]
@@ -175,13 +176,15 @@ def bwrap_command(job_file: str, allowlist_dir: str, program_dir: str, channel_f
     else:
         argv += ["--as-pid-1", "--"]
     return argv + [interpreter(), "-I", "-S", "-B", CHILD, "--job", JOB, "--site", SITE,
-                   "--channel-fd", str(channel_fd)]
+                   "--channel-fd", str(fds[0]), "--cases-fd", str(fds[1])]
 
 
-def unsafe_command(job_file: str, site_dir: str, program_dir: str, channel_fd: int) -> list[str]:
+def unsafe_command(job_file: str, site_dir: str, program_dir: str,
+                   fds: tuple[int, int]) -> list[str]:
     """The same child without any sandbox (``Mode.UNSAFE``)."""
     return [interpreter(), "-I", "-S", "-B", os.path.join(program_dir, "__main__.py"),
-            "--job", job_file, "--site", site_dir, "--channel-fd", str(channel_fd)]
+            "--job", job_file, "--site", site_dir, "--channel-fd", str(fds[0]),
+            "--cases-fd", str(fds[1])]
 
 
 def student_numbers(student: str) -> str:

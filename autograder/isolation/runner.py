@@ -172,11 +172,25 @@ class Collector:
         return {name: s.result(ending, self.setup_notes) for name, s in self.names.items()}
 
 
-def _job_document(job: NotebookJob, limits: Limits, privileged: bool, bpf: bytes = b"") -> dict:
-    """The job as the child reads it: limits, setup, names, cases (inputs in wire format), the
-    modules to load before any student text runs, the ``course_lib`` policy
-    (:func:`allowlist.sandbox_policy`), and the seccomp filter to install then."""
-    names = []
+def _job_document(job: NotebookJob, limits: Limits, privileged: bool, bpf: bytes = b"",
+                  scratch: str = "") -> dict:
+    """The job as the child reads it: limits, setup, names, each case's place in the cases
+    file (:func:`_job_contents`), the modules to load before any student text runs, the
+    ``course_lib`` policy (:func:`allowlist.sandbox_policy`), the seccomp filter to install
+    then, and the scratch folder emptied before each worker (``""``: none)."""
+    return _job_contents(job, limits, privileged, bpf, scratch)[0]
+
+
+def _job_contents(job: NotebookJob, limits: Limits, privileged: bool, bpf: bytes = b"",
+                  scratch: str = "") -> tuple[dict, bytes]:
+    """``(document, cases)``: the job document, which holds no case's inputs, and the cases
+    file, every case's inputs as one wire frame (``{"t": "case", "i", "args", "kwargs"}``)
+    at the ``at``/``len`` its entry in the document gives.
+
+    The cases file never appears in the sandbox's filesystem: the supervisor reads each case
+    from an inherited descriptor when it is due and hands it to the worker, so the process that
+    runs student code never holds a case it is not running (nor another name's)."""
+    names, blob = [], bytearray()
     for k, nj in enumerate(job.names):
         cases = []
         for i, case in enumerate(nj.cases):
@@ -187,14 +201,16 @@ def _job_document(job: NotebookJob, limits: Limits, privileged: bool, bpf: bytes
             except wire.NotPlain as exc:
                 raise ValueError(f"job.names[{k}].cases[{i}] holds {exc}, not plain "
                                  "data") from None
-            cases.append({"args": args, "kwargs": kwargs, "cap": case.result_cap})
+            data = wire.frame({"t": "case", "i": i, "args": args, "kwargs": kwargs})
+            cases.append({"cap": case.result_cap, "at": len(blob), "len": len(data)})
+            blob += data
         names.append({"name": nj.name, "kind": nj.kind, "cells": [list(c) for c in nj.cells],
                       "cases": cases})
     lim = {k: getattr(limits, k) for k in Limits.__dataclass_fields__}
     lim.update(nproc=privileged, budget_seconds=math.ceil(job_budget(job, limits)))
     return {"limits": lim, "setup": job.setup_source, "names": names,
             "modules": list(allowlist.ALLOWED_MODULES), "policy": allowlist.sandbox_policy(),
-            "filter": base64.b64encode(bpf).decode("ascii")}
+            "filter": base64.b64encode(bpf).decode("ascii"), "scratch": scratch}, bytes(blob)
 
 
 def _filter(mode: bwrap.Mode) -> bytes:
@@ -205,27 +221,33 @@ def _filter(mode: bwrap.Mode) -> bytes:
 
 
 def _write_job_files(job: NotebookJob, limits: Limits, workdir: str, privileged: bool,
-                     mode: bwrap.Mode) -> str:
+                     mode: bwrap.Mode, cases_file) -> str:
+    """Write the job document (``job.json``, bound into the sandbox) and the cases into
+    ``cases_file`` (unlinked: only its descriptor reaches the sandbox)."""
+    scratch = "/tmp" if mode is bwrap.Mode.ISOLATED else ""
+    doc, cases = _job_contents(job, limits, privileged, _filter(mode), scratch)
     path = os.path.join(workdir, "job.json")
     with open(path, "w", encoding="utf-8") as f:
-        json.dump(_job_document(job, limits, privileged, _filter(mode)), f)
+        json.dump(doc, f)
     os.chmod(path, 0o644)
+    cases_file.write(cases)
+    cases_file.flush()
     allowlist.write_package(os.path.join(workdir, "site"))
     return path
 
 
-def _command(mode: bwrap.Mode, workdir: str, job_file: str, channel_fd: int, limits: Limits,
-             uid: int | None) -> tuple[list[str], str]:
-    """``(argv, cwd)`` of the child."""
+def _command(mode: bwrap.Mode, workdir: str, job_file: str, fds: tuple[int, int],
+             limits: Limits, uid: int | None) -> tuple[list[str], str]:
+    """``(argv, cwd)`` of the child (``fds``: the channel's write end, the cases file)."""
     if mode is bwrap.Mode.ISOLATED:
         return bwrap.bwrap_command(job_file, os.path.join(workdir, "site"), PROGRAM_DIR,
-                                   channel_fd, limits.scratch_mb, uid), "/"
+                                   fds, limits.scratch_mb, uid), "/"
     site = os.path.join(workdir, "site")
     for path in bwrap.numpy_dirs():
         os.symlink(path, os.path.join(site, os.path.basename(path)))
     scratch = os.path.join(workdir, "scratch")
     os.mkdir(scratch)
-    return bwrap.unsafe_command(job_file, site, PROGRAM_DIR, channel_fd), scratch
+    return bwrap.unsafe_command(job_file, site, PROGRAM_DIR, fds), scratch
 
 
 def _read_channel(proc: subprocess.Popen, rfd: int, collector: Collector,
@@ -260,11 +282,12 @@ def _stop(proc: subprocess.Popen, ending: str) -> None:
         pass
 
 
-def _spawn(argv: list[str], cwd: str, env: dict, wfd: int, errfile, cgroup) -> subprocess.Popen:
+def _spawn(argv: list[str], cwd: str, env: dict, fds: tuple[int, int], errfile,
+           cgroup) -> subprocess.Popen:
     if cgroup is not None and cgroup.procs_files():
         argv = [bwrap.posix_shell(), "-c", JOIN_CGROUP, "sh", *cgroup.procs_files(), "--", *argv]
     return subprocess.Popen(argv, cwd=cwd, env=env, stdin=subprocess.DEVNULL,
-                            stdout=subprocess.DEVNULL, stderr=errfile, pass_fds=(wfd,),
+                            stdout=subprocess.DEVNULL, stderr=errfile, pass_fds=fds,
                             start_new_session=True)
 
 
@@ -294,18 +317,20 @@ def run_notebook(job: NotebookJob, limits: Limits = DEFAULT_LIMITS,
     workdir = tempfile.mkdtemp(prefix="autograder-isolation-")
     lease = cgroup = None
     try:
-        job_file = _write_job_files(job, limits, workdir, root, mode)
+        cases_file = tempfile.TemporaryFile(dir=workdir)
+        job_file = _write_job_files(job, limits, workdir, root, mode, cases_file)
         lease = allocate_uid() if root else None
         cgroup = JobCgroup(f"u{lease.uid}", limits.memory_mb, limits.pids) if root else None
         rfd, wfd = os.pipe()
-        argv, cwd = _command(mode, workdir, job_file, wfd, limits,
-                             lease.uid if lease else None)
+        fds = (wfd, cases_file.fileno())
+        argv, cwd = _command(mode, workdir, job_file, fds, limits, lease.uid if lease else None)
         env = bwrap.child_env("/tmp" if mode is bwrap.Mode.ISOLATED else cwd, job.student)
         with tempfile.TemporaryFile() as errfile:
             try:
-                proc = _spawn(argv, cwd, env, wfd, errfile, cgroup)
+                proc = _spawn(argv, cwd, env, fds, errfile, cgroup)
             finally:
                 os.close(wfd)
+                cases_file.close()
             ending = "eof"
             try:
                 ending = _read_channel(proc, rfd, collector,

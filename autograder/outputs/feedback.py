@@ -290,6 +290,8 @@ def _case_row(c: CaseRecord) -> str:
     expected = f"raises {c.raises}" if c.raises else value_text(c.expected)
     if c.raises and c.verdict is Verdict.PASS:
         received = f"raised {c.raises}"
+    elif not c.shown:
+        received = "– (not of the expected type and shape)"
     elif c.verdict in (Verdict.PASS, Verdict.WRONG_VALUE, Verdict.WRONG_SHAPE):
         received = value_text(c.received)
     else:

@@ -226,6 +226,58 @@ def test_a_lookup_table_of_the_hidden_cases_gains_nothing(lookup):
 
 
 # --------------------------------------------------------------------------------------------
+# the other cases' inputs, read where the worker could find them, returned as a string on a
+# visible case (before the deadline: nothing of a hidden case is revealed)
+
+
+@pytest.fixture(scope="module")
+def leak(tmp_path_factory):
+    src = _src_of("rt_leak_cases")
+    if src is None:
+        pytest.skip("no source notebooks with registered exercises yet")
+    root = tmp_path_factory.mktemp("leak")
+    (root / "secret").write_bytes(SECRET + b"\n")
+    nb = ATTACKS["rt_leak_cases"].build(src)
+    write_nb(root / "submitted" / "rt_leak_cases" / "tripos2006" / f"{src.name}.ipynb", nb)
+    proc = run_grade(root / "submitted", root / "out", "--no-gradebook",
+                     secret_file=root / "secret")
+    name = ATTACKS["rt_leak_cases"].name_in(src)
+    numbers = {True: set(), False: set()}       # visible -> the inputs' numbers
+    for case in cases_of("rt_leak_cases", name, nb):
+        for value in [*case.args, *case.kwargs.values()]:
+            try:
+                got = np.asarray(value, dtype=float).ravel()
+            except (TypeError, ValueError):
+                continue
+            # long reprs only: a random input's digits, not a 0.5 that any page may hold
+            numbers[bool(case.visible)] |= {repr(float(x)) for x in got if len(repr(float(x))) >= 8}
+    hidden = numbers[False] - numbers[True]
+    outputs = {str(p.relative_to(root)): p.read_text("utf-8", "replace")
+               for p in (root / "out").rglob("*") if p.is_file()}
+    outputs.update(stdout=proc.stdout, stderr=proc.stderr)
+    return {"hidden": hidden, "outputs": outputs, "rows": read_grades(root / "out"),
+            "name": name, "root": root, "src": src}
+
+
+def test_no_hidden_input_reaches_any_output(leak):
+    assert leak["hidden"], "the target has hidden cases with random inputs"
+    for where, text in leak["outputs"].items():
+        shown = sorted(h for h in leak["hidden"] if h in text)
+        assert not shown, f"{where} shows hidden inputs {shown[:5]}"
+
+
+def test_a_returned_string_is_described_not_shown(leak):
+    src = leak["src"]
+    row = leak["rows"][("rt_leak_cases", src.name, f"test_{leak['name']}")]
+    assert row["status"] == "failed" and float(row["score"]) == 0.0
+    assert "returned a str, expected" in row["message"]
+    page = html.unescape((leak["root"] / "out" / "feedback" / "rt_leak_cases"
+                          / f"{src.name}.html").read_text("utf-8"))
+    page = re.sub(r"<details class='code'>.*?</details>", "", page, flags=re.S)  # its code
+    assert "not of the expected type and shape" in page and "LEAKED" not in page
+
+
+# --------------------------------------------------------------------------------------------
 # the lookup table behind a helper in ANOTHER cell; the sandbox's /job printed at load time:
 # the phong cell itself never changes
 

@@ -7,8 +7,10 @@ grade --jobs 2``, as an instructor runs it), which is also the "one broken submi
 kind" batch of the issue: it must finish in bounded time with everyone else's scores right.
 
 The expected values are decided here, not read from the grader: full points from the *source*
-notebook's test cells, 0 where tampering was attempted, and partial credit from the registry's
-case list drawn with the grader's documented seed (``case_seed(secret, student, name)``).
+notebook's test cells, 0 where tampering was attempted (raising ValueError on every input
+included: bad-input cases count only once an ordinary case passes), and partial credit from
+the registry's case list drawn with the grader's documented seed (``case_seed(secret, student,
+name)``).
 """
 
 from __future__ import annotations
@@ -343,12 +345,15 @@ def _old_format(src, ctx):
 
 
 def _partial_expect(src, ctx):
+    """Raising ValueError on every input passes exactly the bad-input cases, and those count
+    only once an ordinary case passes: 0, unless every case of the function must raise."""
     name = target_of(src)
     cases = cases_of(ctx.student, name, _submitted_nb(ctx, src))
     raising = sum(c.raises is not None and issubclass(ValueError, c.raises) for c in cases)
+    ordinary = sum(c.raises is None for c in cases)
+    assert raising and ordinary, f"{name}: the bank needs both kinds of case"
     exp = expect_full_marks(src)
-    status = "ok" if raising == len(cases) else "error"
-    exp[f"test_{name}"] = (points_of(src, name) * raising / len(cases), status)
+    exp[f"test_{name}"] = (0.0, "error")
     return exp
 
 

@@ -770,3 +770,92 @@ def test_the_notebook_has_one_hard_time_limit(mode):
     assert kinds(runs["second"]) == [K.NOT_RUN] * 30
     assert "the notebook used up its time" in runs["second"].outcomes[0].message
     assert "the notebook used up its time" in runs["first"].outcomes[-1].message
+
+
+# ------------------------------------------------------------------------------------------
+# a worker holds only the case it is running
+
+#: Looks for case markers where student code can: every object the interpreter tracks (the
+#: frames' locals included), the job file and the scratch folder (``reachable``), and raw memory
+#: (every writable mapping of the process, read through ``__array_interface__``).
+SPY = r"""
+import gc, os, re, sys
+PATTERN = re.compile(rb"MARK[-][a-z][-][0-9]")
+
+class _Raw:
+    def __init__(self, address, n):
+        self.__array_interface__ = {"shape": (n,), "typestr": "|u1", "data": (address, True),
+                                    "version": 3}
+
+def _markers(data):
+    return {m.group().decode() for m in PATTERN.finditer(data)}
+
+def _reachable():
+    found = set()
+    for obj in gc.get_objects():
+        items = obj.values() if type(obj) is dict else obj if type(obj) in (list, tuple) else ()
+        for v in items:
+            if type(v) is str:
+                found |= _markers(v.encode())
+    with open(sys.argv[sys.argv.index("--job") + 1], "rb") as f:
+        found |= _markers(f.read())
+    for entry in os.listdir("."):
+        found |= _markers(entry.encode())
+        if os.path.isfile(entry):
+            with open(entry, "rb") as f:
+                found |= _markers(f.read())
+    return found
+
+def _raw():
+    found = set()
+    with open("/proc/self/maps") as f:
+        maps = f.read().splitlines()
+    for line in maps:
+        parts = line.split()
+        if not parts[1].startswith("rw") or (len(parts) > 5 and parts[5] == "[vvar]"):
+            continue
+        lo, hi = (int(x, 16) for x in parts[0].split("-"))
+        found |= _markers(bytes(np.asarray(_Raw(lo, hi - lo))))
+    return found
+
+def NAME(marker):
+    with open("stash-" + marker, "w") as f:     # for a later worker to find
+        f.write(marker)
+    seen, raw = _reachable(), _raw()
+    return [len({m for m in seen | raw if m[5] != marker[5]}),
+            len({m for m in seen | raw if m[5] == marker[5] and m > marker}),
+            int(marker in seen and marker in raw)]
+"""
+
+
+def test_a_worker_holds_no_other_case_than_its_own(mode):
+    """Each case's inputs reach the worker only when it is due: nothing of a later case of the
+    same name, and nothing of another name, in objects, frames, the job file, the scratch
+    folder (names and contents) or raw memory."""
+    if mode is not Mode.ISOLATED:
+        pytest.skip("the scratch folder is emptied between workers only in the sandbox")
+    names = [fn(n, SPY.replace("NAME", n), cases=[(f"MARK-{n}-{k}",) for k in range(4)])
+             for n in ("f", "g")]
+    runs = run(mode, *names, limits=Limits(case_timeout=20.0, load_timeout=10.0))
+    for n in ("f", "g"):
+        assert kinds(runs[n]) == [K.RETURNED] * 4, [o.message for o in runs[n].outcomes]
+        # no marker of the other name, none of a later case of its own; its own is found
+        assert [o.value for o in runs[n].outcomes] == [[0, 0, 1]] * 4, n
+
+
+def test_the_job_document_holds_no_case_inputs():
+    """The file bound into the sandbox says where each case is, never what it is: the inputs
+    are frames of the cases file, which only the supervisor's descriptor reaches."""
+    from autograder.isolation import runner
+
+    job = NotebookJob("j", SETUP, [fn("f", "def f(x):\n    return x\n",
+                                      cases=[(0.123456789,), (np.array([9.87654321]),)])])
+    doc, cases = runner._job_contents(job, Limits(), False)
+    assert "0.123456789" not in json.dumps(doc) and "args" not in json.dumps(doc)
+    got = []
+    for entry in doc["names"][0]["cases"]:
+        data = cases[entry["at"]:entry["at"] + entry["len"]]
+        rec = json.loads(data[wire.FRAME.size:])
+        assert wire.FRAME.unpack_from(data)[0] == entry["len"] - wire.FRAME.size
+        got.append(wire.decode_value(rec["args"], wire.Budget(1 << 20)))
+    assert got[0] == (0.123456789,) and got[1][0].tolist() == [9.87654321]

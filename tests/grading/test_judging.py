@@ -230,3 +230,75 @@ def test_a_notebook_of_countless_empty_cells_is_unreadable_at_once(tmp_path):
     nb["cells"] = cells[:MAX_CELLS]
     (tmp_path / "q5_phong.ipynb").write_text(json.dumps(nb), encoding="utf-8")
     assert read_submission(tmp_path, "kim", "q5_phong").status is not Status.UNREADABLE
+
+
+# --------------------------------------------------------------------------------------------
+# bad-input cases count only once an ordinary case passes
+
+
+def _rec(i, verdict, raises=""):
+    return CaseRecord(i, "", True, verdict, "why", raises=raises)
+
+
+def test_raising_on_every_input_scores_nothing():
+    # 3 ordinary cases all wrong (they raised), 2 bad-input cases right: 0 of 5 points, not 2
+    records = [_rec(0, Verdict.ERROR), _rec(1, Verdict.ERROR), _rec(2, Verdict.ERROR),
+               _rec(3, Verdict.PASS, "ValueError"), _rec(4, Verdict.PASS, "ValueError")]
+    score, status, message = summarise(records, 5.0)
+    assert score == 0.0 and status is Status.ERROR
+    assert "count only once" in message
+
+
+def test_bad_input_cases_count_once_one_ordinary_case_passes():
+    records = [_rec(0, Verdict.PASS), _rec(1, Verdict.ERROR), _rec(2, Verdict.WRONG_VALUE),
+               _rec(3, Verdict.PASS, "ValueError"), _rec(4, Verdict.PASS, "ValueError")]
+    score, status, message = summarise(records, 5.0)
+    assert score == pytest.approx(3.0, abs=1e-9)       # 3 of 5 cases, the 2 raising included
+    assert "count only once" not in message
+
+
+def test_a_function_whose_cases_all_must_raise_keeps_them():
+    records = [_rec(0, Verdict.PASS, "ValueError"), _rec(1, Verdict.ERROR, "ValueError")]
+    assert summarise(records, 2.0)[0] == pytest.approx(1.0, abs=1e-9)
+
+
+def test_incell_check_and_the_batch_apply_the_same_rule():
+    """``incell.check`` (the student's own check) fails a function that always raises
+    ValueError, and the records it judges carry which cases must raise."""
+    from autograder.incell import _judged, check
+
+    def always_raise(*args, **kwargs):
+        raise ValueError("bad input")
+
+    records = [r for _, r in _judged("normalize", always_raise, 7)]
+    assert any(r.raises == "ValueError" and r.verdict is Verdict.PASS for r in records)
+    assert summarise(records, 1.0)[0] == 0.0
+    with pytest.raises(AssertionError):
+        check("normalize", always_raise)
+
+
+# --------------------------------------------------------------------------------------------
+# a returned value's form
+
+
+@pytest.mark.parametrize("expected,received,same", [
+    (np.zeros(3), np.ones(3), True), (np.zeros(3), np.ones((1, 3)), False),
+    (np.zeros(3), "text", False), (np.zeros(3), [1.0, 2.0, 3.0], False),
+    (1.5, np.float64(2.0), True), (1.5, np.array(2.0), True), (1.5, 2, True),
+    (True, False, True), (True, 1.0, False), (None, None, True), (None, "x", False),
+    ((np.zeros((2, 3)), np.zeros((1, 3), int)), (np.ones((2, 3)), np.ones((1, 3))), True),
+    ((np.zeros((2, 3)), np.zeros((1, 3))), [np.ones((2, 3)), np.ones((1, 3))], True),
+    ((np.zeros((2, 3)), np.zeros((1, 3))), (np.ones((2, 3)),), False)])
+def test_same_form_is_type_and_shape(expected, received, same):
+    from autograder.judging import same_form
+
+    assert same_form(expected, received) is same
+
+
+def test_a_returned_text_is_described_by_its_form_never_its_content():
+    secret = "the hidden inputs: 0.123, 0.456" * 10
+    verdict, why = judge_case(_ex(close()), CASE, np.zeros(3), _returned(secret))
+    assert verdict is Verdict.WRONG_SHAPE
+    assert why == "returned a str, expected an array of shape (3,)"
+    verdict, why = judge_case(_ex(close()), CASE, True, _returned("the hidden inputs"))
+    assert "hidden" not in why and why == "returned a str, expected a bool"

@@ -5,8 +5,9 @@ on the cases of every graded function and reports those that answer, judged by t
 own comparison rule:
 
 - on a forged copy it flags a private helper, a static method and a lambda in a sub-package
-  that compute a reference's answer under other names, and not a readout rounded to display
-  precision nor a routine that only draws;
+  that compute a reference's answer under other names, and one that answers after waiting
+  (each call's budget is CPU time, not the wall clock of a busy machine), and not a readout
+  rounded to display precision, a routine that only draws nor one that never returns;
 - on the instructors' copy it finds every graded function's reference (its oracle);
 - on the students' wheel it finds none of the graded functions the wheel leaves out, and only
   those an explorer or figure still computes with (``student_bundle.STILL_SHIPPED``); that it
@@ -46,6 +47,15 @@ FORGED = {
 
         def draw(L, N):                      # draws, answers nothing
             shading.reflect(L, N)
+
+        def slow_mirror(L, N):               # waits 0.4 s of wall clock, using no CPU (a
+            import time                      # busy machine): still an answer
+            time.sleep(0.4)
+            return shading.reflect(L, N)
+
+        def spin(L, N):                      # never returns: stopped by its CPU budget
+            while True:
+                pass
         """,
     "forged_copy/deep/__init__.py": "",
     "forged_copy/deep/_inner.py": """
@@ -63,7 +73,8 @@ def test_probe_flags_helpers_under_other_names_and_not_readouts(tmp_path):
                                      path=(str(tmp_path / "copy"),))
     assert result["broken"] == {}
     assert result["answers"] == {
-        "reflect": ["forged_copy.Scene.bounce", "forged_copy._mirror"],
+        "reflect": ["forged_copy.Scene.bounce", "forged_copy._mirror",
+                    "forged_copy.slow_mirror"],
         "normalize": ["forged_copy.deep._inner.unit"],
     }
 

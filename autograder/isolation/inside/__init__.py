@@ -3,7 +3,7 @@
 Self-contained: the standard library and NumPy only, never the rest of ``autograder`` (which is
 not in the sandbox). The grader binds this folder read-only into the sandbox as
 ``/sandbox/inside`` and starts ``python -I -S -B /sandbox/inside/__main__.py --job /job --site
-DIR --channel-fd N``; the grader itself imports only :mod:`.wire` (and
+DIR --channel-fd N --cases-fd M``; the grader itself imports only :mod:`.wire` (and
 :func:`.supervisor.name_budget` for its own time budget).
 
 - :mod:`.wire`: the records and values that cross the boundary (length-prefixed JSON, arrays

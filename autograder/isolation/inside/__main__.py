@@ -1,4 +1,5 @@
-"""Run the sandbox program: ``python -I -S -B <this file> --job FILE --site DIR --channel-fd N``.
+"""Run the sandbox program: ``python -I -S -B <this file> --job FILE --site DIR --channel-fd N
+--cases-fd M``.
 
 ``-I`` puts no script folder on ``sys.path``, so the folder holding this package is put there
 just long enough to import it (the supervisor then cuts ``sys.path`` to the standard library

@@ -7,8 +7,9 @@ again), ``sys.path`` cut to the interpreter's standard library and the site dir 
 allow-listed tables), the allowed modules loaded while compiled code still may be, the setup
 cell (trusted, from the source notebook), and one :class:`~.supervisor.NameSupervisor` per
 graded name. Everything it needs comes in the job document: the limits, the setup cell, the
-names and their cases, the modules to preload, the grader's ``course_lib`` policy and the
-seccomp filter every worker installs before any student text runs.
+names and where their cases are (the inputs themselves come through an inherited descriptor,
+:class:`~.supervisor.NameSupervisor`), the modules to preload, the grader's ``course_lib``
+policy and the seccomp filter every worker installs before any student text runs.
 
 Standard library and NumPy only: this module runs inside the sandbox.
 """
@@ -65,7 +66,7 @@ def run_setup(source: str, ns: dict, timeout: float) -> list:
 
 
 def _parse_args(argv: list) -> dict:
-    opts = {"--job": "/job", "--site": "", "--channel-fd": ""}
+    opts = {"--job": "/job", "--site": "", "--channel-fd": "", "--cases-fd": ""}
     it = iter(argv)
     for arg in it:
         if arg not in opts:
@@ -75,9 +76,10 @@ def _parse_args(argv: list) -> dict:
 
 
 def main(argv: list) -> None:
-    """The supervisor's entry point (``__main__.py --job FILE --site DIR --channel-fd N``)."""
+    """The supervisor's entry point (``__main__.py --job FILE --site DIR --channel-fd N
+    --cases-fd M``)."""
     opts = _parse_args(argv)
-    channel = int(opts["--channel-fd"])
+    channel, cases_fd = int(opts["--channel-fd"]), int(opts["--cases-fd"])
     prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
     prctl(PR_SET_DUMPABLE, 0)
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
@@ -107,7 +109,8 @@ def main(argv: list) -> None:
 
     gc.freeze()   # what the workers inherit is never collected there: no copy-on-write storm
     for nj in job["names"]:
-        NameSupervisor(nj, ns, limits, policy, channel, job_deadline, bpf).run()
+        NameSupervisor(nj, ns, limits, policy, (channel, cases_fd), job_deadline, bpf,
+                       str(job.get("scratch") or "")).run()
     write_all(channel, frame({"t": "done"}))
     os._exit(0)
 

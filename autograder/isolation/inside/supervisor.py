@@ -1,11 +1,14 @@
 """The supervisor: the sandbox's first process, which never runs student code.
 
-For each graded name it forks a worker (:mod:`.worker`), forwards the worker's records to the
-ONE channel the grader reads, restarts a crashed or hung worker for the remaining cases (at most
-``max_launches`` processes per name) under deadlines of its own that no record of a worker can
-move (a fixed one per case, a hard end per name and per notebook, ``job_timeout``), and kills
-every leftover process between names. When it is PID 1 of its own PID namespace (the
-sandbox), ``kill(-1, SIGKILL)`` cannot reach it, and clears everything else.
+For each graded name it forks a worker (:mod:`.worker`), hands it one case at a time (read from
+the cases file's descriptor when the case is due: the worker never holds a case it is not yet
+running, nor another name's), forwards the worker's records to the ONE channel the grader
+reads, restarts a crashed or hung worker for the remaining cases (at most ``max_launches``
+processes per name) under deadlines of its own that no record of a worker can move (a fixed one
+per case, a hard end per name and per notebook, ``job_timeout``), and kills every leftover
+process and empties the scratch folder before each name's first worker (so nothing a worker
+saw reaches another name's). When it is PID 1 of its own PID namespace (the sandbox), ``kill(-1, SIGKILL)``
+cannot reach it, and clears everything else.
 
 Standard library only: this module runs inside the sandbox (the grader imports it for
 :func:`name_budget`).
@@ -14,6 +17,8 @@ Standard library only: this module runs inside the sandbox (the grader imports i
 from __future__ import annotations
 
 import os
+import select
+import shutil
 import signal
 import time
 
@@ -61,13 +66,53 @@ def kill_leftovers(worker_pid: int | None) -> None:
         time.sleep(0.002)
 
 
-class NameSupervisor:
-    """Runs one graded name: launches workers, forwards their records, fills in the cases a
-    dead or hung worker could not report."""
+def empty_folder(path: str) -> None:
+    """Remove everything inside ``path`` (the sandbox's private scratch; ``""``: nothing), in
+    a child process: the names a worker chose (they may spell a case's inputs) never enter
+    this process's memory, which every later worker inherits."""
+    if not path:
+        return
+    try:
+        pid = os.fork()
+    except OSError:
+        return
+    if pid == 0:
+        try:
+            _remove_inside(path)
+        finally:
+            os._exit(0)
+    try:
+        os.waitpid(pid, 0)
+    except ChildProcessError:
+        pass
 
-    def __init__(self, nj: dict, ns: dict, limits: dict, policy: Policy, channel: int,
-                 job_deadline: float = float("inf"), bpf: bytes = b""):
-        self.nj, self.ns, self.limits, self.channel = nj, ns, limits, channel
+
+def _remove_inside(path: str) -> None:
+    for entry in os.listdir(path):
+        full = os.path.join(path, entry)
+        try:
+            if os.path.isdir(full) and not os.path.islink(full):
+                shutil.rmtree(full, ignore_errors=True)
+            else:
+                os.unlink(full)
+        except OSError:
+            pass
+
+
+class NameSupervisor:
+    """Runs one graded name: launches workers, feeds them its cases one at a time, forwards
+    their records, fills in the cases a dead or hung worker could not report.
+
+    ``fds``: the channel to the grader and the cases file (each case's frame at the ``at`` and
+    ``len`` of its entry in ``nj["cases"]``); ``scratch``: the folder emptied before each
+    name's first worker starts."""
+
+    def __init__(self, nj: dict, ns: dict, limits: dict, policy: Policy, fds: tuple[int, int],
+                 job_deadline: float = float("inf"), bpf: bytes = b"", scratch: str = ""):
+        self.nj, self.ns, self.limits = nj, ns, limits
+        self.channel, self.cases_fd = fds
+        self.scratch = scratch
+        self.feed_fd = -1          #: the write end of the current worker's case pipe
         self.policy = policy       #: the grader's allow-list of course_lib, for the workers
         self.bpf = bpf             #: the seccomp filter every worker installs
         self.n = len(nj["cases"])
@@ -115,29 +160,73 @@ class NameSupervisor:
     def launch(self) -> bool:
         """One worker process; True when another should continue with the remaining cases."""
         kill_leftovers(self.pid)
+        if self.launches == 0:
+            # a new name: nothing an earlier name's worker stored is left (a restart keeps it:
+            # what it finds is of cases already run, and hidden cases run last)
+            empty_folder(self.scratch)
         self.launches += 1
         rfd, wfd = os.pipe()
+        crfd, cwfd = os.pipe()
         try:
             pid = os.fork()
         except OSError as exc:
-            os.close(rfd)
-            os.close(wfd)
+            for fd in (rfd, wfd, crfd, cwfd):
+                os.close(fd)
             self.settle_rest("crashed", f"could not start a process ({exc.strerror})")
             return False
         if pid == 0:   # the worker: never returns into the supervisor's code
             try:
-                os.close(rfd)
-                os.close(self.channel)
-                worker_main(self.nj, self.ns, self.next, self.limits, self.policy, wfd,
-                            self.bpf)
+                for fd in (rfd, cwfd, self.channel, self.cases_fd):
+                    os.close(fd)
+                worker_main(self.nj, self.ns, self.limits, self.policy, (crfd, wfd), self.bpf)
             finally:
                 os._exit(70)
         os.close(wfd)
-        self.pid, self.status = pid, None
+        os.close(crfd)
+        os.set_blocking(cwfd, False)
+        self.pid, self.status, self.feed_fd = pid, None, cwfd
         try:
             return self.watch(FrameReader(rfd, self.frame_cap()))
         finally:
             os.close(rfd)
+            self.end_feed()
+
+    def end_feed(self) -> None:
+        """Close the worker's case pipe: it has no case left (it then says it is done)."""
+        if self.feed_fd >= 0:
+            os.close(self.feed_fd)
+            self.feed_fd = -1
+
+    def feed(self, deadline: float) -> bool:
+        """Hand case ``self.next`` to the worker (or, none left, close its pipe); False when
+        the worker did not take it by ``deadline``. The case is read from the cases file into
+        a buffer of its own, which is zeroed once written, so no later worker forked from
+        this process finds it in memory."""
+        if self.next >= self.n:
+            self.end_feed()
+            return True
+        entry = self.nj["cases"][self.next]
+        buf = bytearray(int(entry["len"]))
+        try:
+            got = os.preadv(self.cases_fd, [buf], int(entry["at"]))
+            return self._write_by(buf, got, deadline)
+        finally:
+            buf[:] = bytes(len(buf))
+
+    def _write_by(self, buf: bytearray, n: int, deadline: float) -> bool:
+        done = 0
+        with memoryview(buf) as view:
+            while done < n:
+                left = deadline - time.monotonic()
+                if left <= 0 or not select.select([], [self.feed_fd], [], left)[1]:
+                    return False
+                try:
+                    done += os.write(self.feed_fd, view[done:n])
+                except BlockingIOError:
+                    continue
+                except OSError:       # the worker is gone: its reader sees the end
+                    return True
+        return True
 
     def frame_cap(self) -> int:
         caps = [int(c["cap"]) for c in self.nj["cases"]] or [0]
@@ -182,12 +271,16 @@ class NameSupervisor:
                 if self.launches == 1:
                     self.emit({"t": "loaded", "defined": rec.get("defined") is True,
                                "printed": str(rec.get("printed"))[:2 * self.limits["output_bytes"]]})
+                if not self.feed(deadline):
+                    return self.failed("timeout", loading, started)
             elif t == "start" and not loading and rec.get("i") == self.next:
-                deadline = self.case_deadline(self.next, now)
+                pass      # harmless: the case's deadline was fixed when it was handed over
             elif t == "case" and not loading and rec.get("i") == self.next:
                 if not self.forward_case(rec, raw):
                     return False
                 started, deadline = now, self.case_deadline(self.next, now)
+                if not self.feed(deadline):
+                    return self.failed("timeout", loading, started)
             elif t == "done" and not loading:
                 return False
             else:

@@ -1,7 +1,8 @@
 """The worker: a process the supervisor forks per graded name, the only one that runs student
 code. It makes itself a worker (own session, memory limit, prints captured, and last the
-seccomp filter), executes the name's cells within ONE load time limit, then runs the cases,
-each under an alarm, streaming each case's encoded record to the supervisor over a pipe.
+seccomp filter), executes the name's cells within ONE load time limit, then runs the cases
+the supervisor hands it one at a time over a pipe (it holds no other case), each under an
+alarm, streaming each case's encoded record back over another pipe.
 
 Nothing here is trusted by anyone: the student's code owns this process and may replace any
 of it. The supervisor keeps the deadlines; the grader re-validates every record.
@@ -19,7 +20,8 @@ import time
 from .confine import install_filter
 from .failures import (MISSING_AFTER_REFUSAL, REFUSED_CODE, Policy, exc_mro, exc_name,
                        reference_module, refused_code, safe_str)
-from .wire import Budget, NotPlain, TooLarge, decode_value, encode_value, frame, record_cap, write_all
+from .wire import (Budget, FrameReader, NotPlain, TooLarge, decode_value, encode_value, frame,
+                   record_cap, write_all)
 
 
 class CaseTimeout(BaseException):
@@ -167,9 +169,11 @@ class Worker:
                     "message": safe_str(exc, 500)}
         return _encode_result(value, int(case["cap"]))
 
-    def case_record(self, i: int, loaded: tuple[str, bool]) -> bytes:
-        """Case ``i``'s record as bytes on the wire, within its size cap."""
-        nj, case = self.nj, self.nj["cases"][i]
+    def case_record(self, given: dict, loaded: tuple[str, bool]) -> bytes:
+        """The record of the case the supervisor handed over (``given``: its index, args and
+        kwargs) as bytes on the wire, within its size cap."""
+        nj, i = self.nj, given["i"]
+        case = dict(nj["cases"][i], args=given["args"], kwargs=given["kwargs"])
         reference, refused = loaded
         self.capture.take()
         t0 = time.monotonic()
@@ -240,18 +244,25 @@ def _worker_setup(limits: dict, bpf: bytes = b"") -> Capture:
     return capture
 
 
-def worker_main(nj: dict, ns: dict, start: int, limits: dict, policy: Policy, out_fd: int,
+def worker_main(nj: dict, ns: dict, limits: dict, policy: Policy, fds: tuple[int, int],
                 bpf: bytes = b"") -> None:
-    """The worker's whole life: cells, then cases ``start...``, each streamed; never returns."""
+    """The worker's whole life: cells, then each case the supervisor hands over on ``fds[0]``
+    until it closes that pipe, each result streamed on ``fds[1]``; never returns."""
+    in_fd, out_fd = fds
     code = 0
     try:
         worker = Worker(nj, ns, limits, policy, out_fd, _worker_setup(limits, bpf))
         loaded = worker.load_cells()
         worker.send({"t": "loaded", "name": nj["name"], "defined": nj["name"] in ns,
                      "printed": worker.capture.take()})
-        for i in range(start, len(nj["cases"])):
-            worker.send({"t": "start", "name": nj["name"], "i": i})
-            write_all(out_fd, worker.case_record(i, loaded))
+        reader = FrameReader(in_fd, max([int(c["len"]) for c in nj["cases"]] or [0]))
+        while True:
+            event, payload = reader.next(float("inf"))
+            given = payload[0] if event == "record" else None
+            if given is None or given.get("t") != "case" or type(given.get("i")) is not int \
+                    or not 0 <= given["i"] < len(nj["cases"]):
+                break
+            write_all(out_fd, worker.case_record(given, loaded))
         worker.send({"t": "done", "name": nj["name"]})
     except BaseException:  # noqa: BLE001 - e.g. the pipe closed: the supervisor decides
         code = 70

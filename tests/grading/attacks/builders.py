@@ -10,8 +10,10 @@ model answer, ``_model``), ``append_`` (appended to the name's solution cell) or
 ``$name`` is the graded name and ``$path``, ``$module``, ``$function`` are the attacked
 reference's file, module (renamed) and function.
 
-``points``: ``full``, ``0``, or ``bad-input`` (the share of cases where a ``ValueError`` is the
-right answer: the honest model raises before the attack returns). ``others``: ``full`` (every
+``points``: ``full`` or ``0``. An attack whose wrapper lets the honest model raise on bad input
+before it returns its junk passes exactly the cases where a ``ValueError`` is the right answer
+(:func:`raising_fraction`), and those count only once an ordinary case passes: 0. ``others``:
+``full`` (every
 other cell full marks), ``full-except-callers`` (the cells whose model answer calls the
 attacked name are not pinned) or ``same`` (every graded and manual cell 0 with the status: a
 notebook that cannot be graded).
@@ -27,7 +29,7 @@ from pathlib import Path
 from string import Template
 
 from gradingtools import (append_cell, cases_of, cell_index, expect_all, expect_full_marks,
-                          model_version, points_of, release_version, target_of)
+                          model_version, release_version, target_of)
 
 from autograder.exercises import REGISTRY
 
@@ -49,7 +51,7 @@ class Attack:
     name: str            #: the graded name attacked ("" = the notebook's target)
     payload: str
     status: str          #: the status of the name's test cell
-    points: str          #: "full", "0" or "bad-input"
+    points: str          #: "full" or "0"
     others: str          #: "full", "full-except-callers" or "same"
 
     def name_in(self, src) -> str:
@@ -86,11 +88,9 @@ class Attack:
                 exp.pop(f"test_{caller}", None)
         if self.points == "full":
             return exp
-        score = 0.0
-        if self.points == "bad-input":
-            raising, n = raising_fraction(self.student, name, self.build(src))
-            score = points_of(src, name) * raising / n
-        exp[f"test_{name}"] = (score, self.status)
+        if self.points != "0":
+            raise ValueError(f"{self.student}: points must be 'full' or '0', got {self.points!r}")
+        exp[f"test_{name}"] = (0.0, self.status)
         return exp
 
 
