@@ -116,7 +116,9 @@ def render(marks: NotebookMarks, grader_page: str | None) -> str:
         head.append(f"<p>Late penalty: −{format_score(marks.late_penalty)}.</p>")
     rows = ["<table><tr><th>cell</th><th>mark</th><th>marker's comment</th></tr>"]
     for m in marks.marks:
-        mark = (f"{format_score(round(m.score, 2))} / {format_score(m.max_score)}" if m.marked
+        # a practice item is worth nothing: "0 / 0" would read as a fail beside it
+        mark = ("practice, no marks" if m.max_score == 0 and not m.written
+                else f"{format_score(round(m.score, 2))} / {format_score(m.max_score)}" if m.marked
                 else "not marked yet")
         rows.append(f"<tr><td>{e(m.grade_id)}{' (written answer)' if m.written else ''}</td>"
                     f"<td>{e(mark)}</td><td class='comment'>{comment_html(m.comment)}</td></tr>")

@@ -201,3 +201,15 @@ def test_missing_secrets_names_the_students_whose_folder_lacks_nbgraders_files(t
         for name in handback.CARRIED_FILES if carried else ():
             (folder / name).write_text("x")
     assert handback.missing_secrets(tmp_path) == ["ef789"]
+
+
+def test_a_practice_item_is_not_shown_as_zero_of_zero():
+    """A practice item (0 marks) reads "practice" in the hand-back table, not "0 / 0", which a
+    student reads as a fail (a careful student's playtest)."""
+    nb = handback.NotebookMarks("ann", "q3_marching_cubes", [
+        handback.Mark("q3_item6", 0.0, 0.0, False, True, ""),
+        handback.Mark("q3b_test", 1.5, 1.5, False, True, ""),
+    ])
+    page = text_of(handback.render(nb, None))
+    assert "q3_item6 practice, no marks" in page, page
+    assert "0 / 0" not in page and "1.5 / 1.5" in page
