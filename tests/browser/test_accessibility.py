@@ -261,7 +261,8 @@ _MARK_CONTROLS_JS = """(out) => {
     return clean(l && l.textContent);
   };
   const found = [];
-  for (const el of out.querySelectorAll('[role=slider], button, select, input, textarea, [contenteditable=true]')) {
+  const selector = '[role=slider], button, select, input, textarea, [contenteditable=true]';
+  for (const el of out.querySelectorAll(selector)) {
     if (el.tabIndex < 0 || !el.offsetParent) continue;
     const i = found.length;
     el.setAttribute('data-a11y-ctl', String(i));
@@ -323,9 +324,9 @@ def test_slider_values_are_spoken_as_shown_with_units(ran):
     value, not its logarithm) followed by its unit."""
     name, page = ran
     out = _explorer(page)
-    sliders = [(c, ax) for c, ax in _controls(page, out) if ax["role"] == "slider"]
+    sliders = [c for c, ax in _controls(page, out) if ax["role"] == "slider"]
     assert sliders, f"{name}: no slider"
-    for c, ax in sliders:
+    for c in sliders:
         # Chromium's DevTools tree leaves its "valuetext" property empty even where the
         # platform tree says aria-valuetext, so the attribute itself is read
         text = c["valuetext"] or ""

@@ -238,7 +238,7 @@ def test_the_announced_summary_states_the_end_values():
         assert line == end_summary("b-spline", "d=2c-b", e.scene["end"])
         assert f"p = ({C[0]:.2f}, {C[1]:.2f})" in line
         assert "p'' = (0.00, 0.00)" in line or "p'' = (-0.00, 0.00)" in line
-        e.widget                      # the layout marks its readouts as live regions
+        assert e.widget is not None   # building the layout marks its readouts live
         assert "course-live" in e.summary._dom_classes
     finally:
         plt.close(e.fig)
