@@ -235,3 +235,17 @@ def test_a_curve_is_described_as_the_axes_show_it():
     assert "'box', a closed outline over x 2 to 4, y -60 to -40" in text
     assert "'spot' at the point (3, -30)" in text
     assert "unnamed" not in text
+
+
+def test_phong_vectors_give_each_arrow_its_direction():
+    """Q5(a) with L 40 degrees left of N and V 15 degrees right: R mirrors L (40 right) and
+    H bisects L and V ((40 - 15) / 2 = 12.5 degrees left)."""
+    from course_lib.plots.shading import plot_reflection_vectors
+
+    fig, ax = plt.subplots()
+    plot_reflection_vectors(40.0, -15.0, ax=ax)
+    text = alt_text(fig)
+    assert "L (towards the light) 40 degrees left of N" in text
+    assert "R (the mirror reflection of L) 40 degrees right of N" in text
+    assert "V (towards the viewer) 15 degrees right of N" in text
+    assert "H (halfway between L and V) 12.5 degrees left of N" in text
