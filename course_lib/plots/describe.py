@@ -33,6 +33,8 @@ def num(value) -> str:
     value = float(value)
     if not np.isfinite(value):
         return str(value)
+    if abs(value) < 1e-12:      # rounding noise of a computed zero ("2.78e-17"), read as 0
+        value = 0.0
     if value == 0 or not 1e-3 <= abs(value) < 1e6:
         return f"{value:.3g}".replace("e+0", "e").replace("e-0", "e-")
     digits = 2 - int(np.floor(np.log10(abs(value))))    # decimals that keep 3 figures
@@ -120,6 +122,17 @@ def _finite_xy(line):
     return x[ok], y[ok]
 
 
+def _in_view(line, x, y):
+    """The part of a curve inside its panel's x range, its values clipped to the y range:
+    what the figure shows (a trace drawn down to -120 on an axis from -100 reads -100)."""
+    ax = line.axes
+    if ax is None or ax.name != "rectilinear" or x.size == 0:
+        return x, y
+    (x0, x1), (y0, y1) = sorted(ax.get_xlim()), sorted(ax.get_ylim())
+    inside = (x >= x0) & (x <= x1)
+    return (x[inside], np.clip(y[inside], y0, y1)) if inside.any() else (x[:0], y[:0])
+
+
 def _line(line) -> str:
     label = line.get_label()
     name = f"'{_clean(label)}'" if label and not label.startswith("_") else "a line"
@@ -130,9 +143,14 @@ def _line(line) -> str:
             return f"{name} through " + ", ".join(
                 "(" + ", ".join(num(v) for v in p) + ")" for p in pts)
         return f"{name} of {len(pts)} points"
-    x, y = _finite_xy(line)
+    x, y = _in_view(line, *_finite_xy(line))
     if x.size == 0:
         return ""
+    if np.ptp(x) == 0 and np.ptp(y) == 0:
+        return f"{name} at the point ({num(x[0])}, {num(y[0])})"
+    if x.size > 4 and x[0] == x[-1] and y[0] == y[-1]:
+        return (f"{name}, a closed outline over x {num(x.min())} to {num(x.max())}, "
+                f"y {num(y.min())} to {num(y.max())}")
     if x.size <= 4:
         return f"{name} through " + ", ".join(f"({num(a)}, {num(b)})" for a, b in zip(x, y))
     k, j = int(np.argmax(y)), int(np.argmin(y))
@@ -141,15 +159,13 @@ def _line(line) -> str:
 
 
 def _lines(ax) -> list[str]:
-    """Named curves one by one; unnamed ones (edges, guides) too when few, else counted."""
+    """Named curves one by one; unnamed ones (edges, guides) too when few."""
     lines = [ln for ln in ax.get_lines() if ln.get_visible()]
     named = [ln for ln in lines if not ln.get_label().startswith("_")]
     unnamed = [ln for ln in lines if ln.get_label().startswith("_")]
     shown = named[:MAX_ITEMS] + (unnamed if len(unnamed) <= 3 else [])
+    # many unnamed lines are a drawing's edges and guides: not worth a count read aloud
     said = [s for s in map(_line, shown) if s]
-    rest = len(lines) - len(shown)
-    if rest:
-        said.append(f"{rest}{' more' if said else ''} unnamed line{'s' if rest > 1 else ''}")
     return [("Lines: " if len(said) > 1 else "") + "; ".join(said) + "."] if said else []
 
 

@@ -11,6 +11,7 @@ from matplotlib.patches import Arc
 
 from .. import shading, spectral
 from ..plotting import COLOURS, new_figure
+from .describe import num, set_summary
 
 __all__ = [
     "ALIASING_CASES",
@@ -86,10 +87,28 @@ def plot_reflection_vectors(incidence_deg: float = 40.0, view_deg: float = -15.0
     ax.text(0.22, 0.5, "θ", fontsize=11)
     ax.set_aspect("equal", adjustable="box")
     ax.set_title("Phong vectors: R = 2(L·N)N − L")
+    set_summary(ax, _vectors_summary({"L": L, "R": R, "V": V, "H": H}))
     ax.set_xlim(-1.3, 1.3)
     ax.set_ylim(-0.2, 1.3)
     ax.set_axis_off()
     return art
+
+
+_VEC_MEANING = {"L": "towards the light", "R": "the mirror reflection of L",
+                "V": "towards the viewer", "H": "halfway between L and V"}
+
+
+def _vectors_summary(vectors) -> str:
+    """Q5(a)'s arrows in words: each one's angle from the normal N (which points straight up
+    from the horizontal surface), to the left or the right."""
+    said = []
+    for name, v in vectors.items():
+        angle = float(np.degrees(np.arctan2(-v[0], v[1])))    # positive: towards the left
+        side = "along N" if abs(angle) < 0.05 else \
+            f"{num(abs(angle))} degrees {'left' if angle > 0 else 'right'} of N"
+        said.append(f"{name} ({_VEC_MEANING[name]}) {side}")
+    return ("A horizontal surface with its normal N pointing straight up; arrows from the "
+            "point of incidence: " + "; ".join(said) + ".")
 
 
 def sphere_pair(colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128, axes=None,

@@ -192,9 +192,11 @@ def plot_aline(depth, envelope, x, columns, ax=None, labels=None, phantom=None, 
         j = int(np.argmin(np.abs(x - xc)))
         level = 20 * np.log10(np.maximum(envelope[:, j], 1e-6))
         label = labels[i] if labels else f"x = {x[j]:.1f} mm"
-        # a line style of its own too: the columns are told apart without their colours
+        # told apart without their colours: a dash pattern is lost along a jagged echo trace
+        # of a thousand samples, so each column also carries a marker shape of its own
         (line,) = ax.plot(depth, level, color=colours[i % 4], linewidth=0.8, label=label,
-                          linestyle=("-", "--", "-.", ":")[i % 4])
+                          linestyle=("-", "--", "-.", ":")[i % 4], marker="osD^"[i % 4],
+                          markersize=4, markevery=max(1, len(depth) // 12))
         lines.append(line)
         if phantom is not None:
             _, _true, shown = us.phantom_interfaces(phantom["blocks"], phantom["floor_depth"],

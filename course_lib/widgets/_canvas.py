@@ -163,31 +163,122 @@ function paintScene(ctx, scene, scratch, hatches) {
 // noUiSlider <div role="slider">) no accessible name, and an HTML readout no live region. The
 // controls are ipywidgets' own views, so the names are set here, on the explorer's outermost
 // widget box, and again whenever its views re-render (a MutationObserver).
-function nameControls(root) {
+
+// A label's text as a name: ipywidgets writes a missing tooltip into `title` as the string
+// "null", and an empty description as a zero-width space; neither is a name.
+function labelName(label, useTitle) {
+  if (!label) return "";
+  const clean = (s) => (s || "").replace(/[\u200b\u200c\u200d\ufeff]/g, "").trim();
+  const title = useTitle ? clean(label.title) : "";
+  return title && title !== "null" && title !== "undefined" ? title : clean(label.textContent);
+}
+
+// The unit a screen reader says after a slider's value, read from its description: the last
+// "(...)" when it is a unit (short, or with a "/" or a digit: "mm", "m/s", "MHz"), not a word
+// that names the quantity ("exponent", "ambient"); or a trailing degree sign.
+function unitOf(description) {
+  if (/°\s*$/.test(description)) return "degrees";
+  const m = /\(([^()]*)\)\s*$/.exec(description);
+  if (!m) return "";
+  const inside = m[1].trim();
+  return inside.length <= 3 || /[\/\d]/.test(inside) ? inside : "";
+}
+
+// aria-valuetext: the readout as shown (rounded as the readout rounds it; a log slider's
+// readout is the value, not its logarithm) with the unit. Hooked on noUiSlider's own "update"
+// event, which runs after ipywidgets' handler has rewritten the readout and after noUiSlider
+// has written its raw number, so the text is current as the value is announced.
+function speakValues(slider, handles) {
+  const readout = slider.querySelector(".widget-readout");
+  const description = labelName(slider.querySelector(".widget-label"), false);
+  const unit = unitOf(description);
+  const text = () => {
+    const shown = readout ? readout.textContent.trim() : "";
+    return shown && unit ? `${shown} ${unit}` : shown;
+  };
+  const sync = () => {
+    const t = text();
+    if (!t) return;
+    for (const h of handles) if (h.getAttribute("aria-valuetext") !== t) h.setAttribute("aria-valuetext", t);
+  };
+  const target = slider.querySelector(".noUi-target");
+  const api = target && target.noUiSlider;
+  if (api && !api.courseSpoken) {
+    api.courseSpoken = true;
+    api.on("update.coursea11y", sync);
+  }
+  sync();
+}
+
+function nameSliders(root) {
   for (const slider of root.querySelectorAll(".widget-slider")) {
     const label = slider.querySelector(".widget-label");
     // the slider's tooltip (ipywidgets puts it on the label) when it has one: a fuller name
-    const name = (label ? (label.title || label.textContent) : "").trim();
+    const name = labelName(label, true);
     if (!name) continue;
-    for (const handle of slider.querySelectorAll(".noUi-handle, [role=slider]"))
+    const handles = slider.querySelectorAll(".noUi-handle, [role=slider]");
+    for (const handle of handles)
       if (handle.getAttribute("aria-label") !== name) handle.setAttribute("aria-label", name);
     const readout = slider.querySelector(".widget-readout");
-    if (readout && readout.getAttribute("aria-label") !== `${name}, value`)
-      readout.setAttribute("aria-label", `${name}, value`);
+    if (readout) {
+      if (readout.getAttribute("aria-label") !== `${name}, value`)
+        readout.setAttribute("aria-label", `${name}, value`);
+      // the value box stays editable by mouse; for the keyboard the handle (arrows, Page
+      // Up/Down, Home, End) sets the same value, so the box is not a second Tab stop
+      if (readout.getAttribute("tabindex") !== "-1") readout.setAttribute("tabindex", "-1");
+    }
+    speakValues(slider, handles);
   }
-  // other inputs beside a description (a colour picker's <input type="color">, ...)
+}
+
+// ToggleButtons: which option is chosen is shown only by a class; say it with aria-pressed,
+// and name the group by its description.
+function markToggles(root) {
+  for (const group of root.querySelectorAll(".widget-toggle-buttons")) {
+    const name = labelName(group.querySelector(":scope > .widget-label"), false);
+    if (group.getAttribute("role") !== "group") group.setAttribute("role", "group");
+    if (name && group.getAttribute("aria-label") !== name) group.setAttribute("aria-label", name);
+    for (const b of group.querySelectorAll("button")) {
+      const pressed = b.classList.contains("mod-active") ? "true" : "false";
+      if (b.getAttribute("aria-pressed") !== pressed) b.setAttribute("aria-pressed", pressed);
+    }
+  }
+}
+
+function nameControls(root) {
+  nameSliders(root);
+  markToggles(root);
+  // other inputs beside a description (a colour picker's <input type="color">, ...); a
+  // checkbox inside its own <label> is named by that label already
   for (const box of root.querySelectorAll(".widget-inline-hbox")) {
     const label = box.querySelector(":scope > .widget-label");
-    const name = label ? label.textContent.trim() : "";
-    if (!name) continue;
-    for (const input of box.querySelectorAll("input, select, textarea"))
-      if (!input.getAttribute("aria-label") && !(input.id && label.htmlFor === input.id))
-        input.setAttribute("aria-label", name);
+    const name = labelName(label, false);
+    for (const input of box.querySelectorAll("input, select, textarea")) {
+      if (input.closest("label") || (input.id && label && label.htmlFor === input.id)) {
+        if (/^[\s\u200b]*$/.test(input.getAttribute("aria-label") || "x"))
+          input.removeAttribute("aria-label");
+        continue;
+      }
+      if (name && !input.getAttribute("aria-label")) input.setAttribute("aria-label", name);
+    }
   }
+  // an icon-font glyph (Font Awesome's private-use character) is no part of a button's name
+  for (const icon of root.querySelectorAll("button i, button .fa"))
+    if (icon.getAttribute("aria-hidden") !== "true") icon.setAttribute("aria-hidden", "true");
   for (const live of root.querySelectorAll(".course-live"))
     if (live.getAttribute("aria-live") !== "polite") {
       live.setAttribute("aria-live", "polite"); live.setAttribute("role", "status");
     }
+}
+
+// Arrow keys and their kin belong to the focused control (a slider, a closed drop-down, a
+// text box): JupyterLab's notebook would otherwise take them to move to another cell.
+const KEPT_KEYS = new Set(["ArrowUp", "ArrowDown", "ArrowLeft", "ArrowRight", "PageUp",
+                           "PageDown", "Home", "End"]);
+function keepKeys(root) {
+  if (root.courseKeysKept) return;
+  root.courseKeysKept = true;
+  root.addEventListener("keydown", (e) => { if (KEPT_KEYS.has(e.key)) e.stopPropagation(); });
 }
 
 function explorerRoot(el) {
@@ -202,14 +293,17 @@ function watchControls(el) {
   const attach = () => {
     if (!el.isConnected) { if (tries++ < 200) setTimeout(attach, 50); return; }
     const root = explorerRoot(el);
+    keepKeys(root);
     nameControls(root);
     // readouts change with every frame: look again once they have settled, not per change
     observer = new MutationObserver(() => {
+      markToggles(root);        // a chosen option is said at once, not a moment later
       if (pending) return;
       pending = true;
       setTimeout(() => { pending = false; nameControls(root); }, 100);
     });
-    observer.observe(root, {childList: true, subtree: true});
+    observer.observe(root, {childList: true, subtree: true, attributes: true,
+                            attributeFilter: ["class"]});
   };
   attach();
   return () => { if (observer) observer.disconnect(); tries = 1e9; };

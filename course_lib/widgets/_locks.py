@@ -159,9 +159,12 @@ def mark_live_readouts(layout):
     """Give the explorer's text readouts (its ``HTML`` and ``Label`` widgets; not the typeset
     formulas, which a screen reader would spell out on every move) the class ``course-live``:
     the figure canvas' page code makes them ``aria-live="polite"`` status regions, so a
-    screen reader announces what a control's move changed. Returns ``layout``."""
+    screen reader announces what a control's move changed. A widget with the class
+    ``course-quiet`` stays out (a table a screen reader would read out whole on every move:
+    its explorer announces a one-line summary beside it). Returns ``layout``."""
     for widget in _widgets_in(layout):
-        if type(widget) in (W.HTML, W.Label):
+        # a readout marked ``course-quiet`` (a whole table) is read on demand, not announced
+        if type(widget) in (W.HTML, W.Label) and "course-quiet" not in widget._dom_classes:
             widget.add_class("course-live")
     return layout
 

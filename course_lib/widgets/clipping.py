@@ -143,7 +143,10 @@ class ClippingExplorer:
                                 description=name, continuous_update=True, readout_format=".2f",
                                 tooltip=f"{name} of the vertex chosen in 'move' (homogeneous)")
             for c, (name, lo_) in enumerate(zip(_COORDS, (-reach, -reach, -reach, -1.5)))]
+        # the vertex table is read on demand; the one-line summary above it is announced
         self.readout = widgets.HTML()
+        self.readout.add_class("course-quiet")
+        self.summary = widgets.Label()
         self._sync_sliders()
         self.step.observe(self._on_step, names="value")
         self.prev_button.on_click(lambda _: self._nudge(-1))
@@ -156,6 +159,7 @@ class ClippingExplorer:
             widgets.HBox([self.vertex, *self.coord_sliders[:2]]),
             widgets.HBox([widgets.Label(layout=widgets.Layout(width="180px")),
                           *self.coord_sliders[2:]]),
+            self.summary,
             self.readout,
         ])
         self.update()
@@ -249,6 +253,7 @@ class ClippingExplorer:
         self.last_update_ms = 1000 * (time.perf_counter() - t0)
         self._view.redraw(self.fig)
         self.readout.value = self._table(current)  # the figure's frame first, the table after it
+        self.summary.value = title
 
     def _plane_line_2d(self, k):
         """The active plane seen edge-on in the 2-D panel (when it is perpendicular to it)."""

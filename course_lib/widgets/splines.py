@@ -98,6 +98,13 @@ def formulas_html(kind: str, rule: str, end=None) -> str:
     return "".join(html)
 
 
+def end_summary(kind: str, rule: str, end) -> str:
+    """One line a screen reader announces after each move (Q4(c)): the spline, its end rule
+    and ``p, p', p''`` at ``t = 1`` (the typeset panel beside it is read on demand)."""
+    values = ", ".join(f"{n} = ({v[0]:.2f}, {v[1]:.2f})" for n, v in zip(("p", "p'", "p''"), end))
+    return f"{_KIND_TITLE[kind]}, end rule {_RULE_TITLE[rule]}: at t = 1, {values}"
+
+
 class SplineEndExplorer(FigureExplorer):
     """Interactive explorer of Q4(c)'s end conditions (see the module docstring).
 
@@ -153,6 +160,7 @@ class SplineEndExplorer(FigureExplorer):
                                tooltip="y of the point chosen in 'move'")
         self.show_hull = W.Checkbox(value=True, description="B-spline convex hull")
         self.formulas = W.HTMLMath(layout=W.Layout(width="420px"))
+        self.summary = W.Label()
         self.status = W.Label()
 
         with plt.ioff():
@@ -195,6 +203,7 @@ class SplineEndExplorer(FigureExplorer):
         self.ax.set_title(f"{_KIND_TITLE[self.kind.value]}, end rule {_RULE_TITLE[rule]}")
         self._redraw()  # the figure first: the page typesets the formulas after painting it
         self.formulas.value = formulas_html(self.kind.value, rule, self.scene["end"])
+        self.summary.value = end_summary(self.kind.value, rule, self.scene["end"])
 
     def get_point(self, index):
         """Control point ``index`` (0 .. m-1), or ``"start"`` / ``"end"`` for a free phantom."""
@@ -331,7 +340,7 @@ class SplineEndExplorer(FigureExplorer):
     def _build_layout(self, view):
         """The explorer's layout: the figure beside the controls and the formulas."""
         controls = W.VBox([self.kind, self.rule, self.point, self.x, self.y,
-                           self.show_hull, self.formulas, self.status])
+                           self.show_hull, self.summary, self.formulas, self.status])
         return W.HBox([view, controls])
 
 

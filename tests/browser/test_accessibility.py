@@ -242,3 +242,145 @@ def test_explorer_has_no_serious_violations_after_keys(ran, artifacts):
     save(artifacts / f"axe-{name}-explorer.json", found)
     bad = severe(found)
     assert not bad, f"{name} explorer: axe found\n{describe(bad)}"
+
+
+# --- what a screen reader says: Chromium's own accessibility tree -------------------------
+
+_MARK_CONTROLS_JS = """(out) => {
+  // every keyboard-reachable control of the explorer, tagged, with its visible label
+  const clean = (s) => (s || '').replace(/[\\u200b\\ue000-\\uf8ff]/g, '').trim();
+  const labelOf = (el) => {
+    if (el.getAttribute('role') === 'slider') {
+      const s = el.closest('.widget-slider');
+      return clean(s && s.querySelector('.widget-label').textContent);
+    }
+    if (el.type === 'checkbox') return clean(el.closest('label') && el.closest('label').textContent);
+    if (el.tagName === 'BUTTON') return clean(el.textContent);
+    const box = el.closest('.widget-inline-hbox');
+    const l = box && box.querySelector(':scope > .widget-label');
+    return clean(l && l.textContent);
+  };
+  const found = [];
+  const selector = '[role=slider], button, select, input, textarea, [contenteditable=true]';
+  for (const el of out.querySelectorAll(selector)) {
+    if (el.tabIndex < 0 || !el.offsetParent) continue;
+    const i = found.length;
+    el.setAttribute('data-a11y-ctl', String(i));
+    const slider = el.closest('.widget-slider');
+    const readout = slider && slider.querySelector('.widget-readout');
+    found.push({i, tag: el.tagName, label: labelOf(el),
+                readout: readout ? readout.textContent.trim() : null,
+                valuetext: el.getAttribute('aria-valuetext'),
+                pressed: el.classList.contains('mod-active'),
+                toggle: !!el.closest('.widget-toggle-buttons')});
+  }
+  return found;
+}"""
+
+
+def _ax_node(page, cdp, index: int) -> dict:
+    """Chromium's accessibility node of the control tagged ``index``: role, name, properties."""
+    obj = cdp.send("Runtime.evaluate", {
+        "expression": f"document.querySelector('[data-a11y-ctl=\"{index}\"]')"})["result"]
+    node = cdp.send("Accessibility.getPartialAXTree",
+                    {"objectId": obj["objectId"], "fetchRelatives": False})["nodes"][0]
+    props = {p["name"]: p["value"].get("value") for p in node.get("properties", [])}
+    return {"role": node.get("role", {}).get("value"),
+            "name": (node.get("name") or {}).get("value", ""),
+            "value": (node.get("value") or {}).get("value"), **props}
+
+
+def _controls(page, out):
+    cdp = page.context.new_cdp_session(page)
+    cdp.send("Accessibility.enable")
+    controls = out.evaluate(_MARK_CONTROLS_JS)
+    return [(c, _ax_node(page, cdp, c["i"])) for c in controls]
+
+
+#: a slider's unit as its description shows it, and as its value text must say it
+_UNIT = re.compile(r"\((mm|m/s|MHz)\)\s*$|(°)\s*$")
+
+
+def test_every_control_is_named_by_its_visible_label(ran):
+    """The accessible name (what a screen reader says) holds the control's visible label and
+    is never "null", "undefined" or blank (WCAG 2.5.3, label in name)."""
+    name, page = ran
+    out = _explorer(page)
+    time.sleep(0.5)
+    controls = _controls(page, out)
+    assert controls, f"{name}: no control found in the explorer"
+    bad = []
+    for c, ax in controls:
+        spoken = ax["name"].strip().replace("\u200b", "")
+        if (not spoken or re.search(r"\b(null|undefined)\b", spoken)
+                or re.search(r"[\ue000-\uf8ff]", spoken)
+                or (c["label"] and c["label"].lower() not in spoken.lower())):
+            bad.append((c["tag"], c["label"], ax["role"], ax["name"]))
+    assert not bad, f"{name}: controls whose spoken name is not their label: {bad}"
+
+
+def test_slider_values_are_spoken_as_shown_with_units(ran):
+    """A slider's value text is its readout as shown (rounded, no float noise; a log slider's
+    value, not its logarithm) followed by its unit."""
+    name, page = ran
+    out = _explorer(page)
+    sliders = [c for c, ax in _controls(page, out) if ax["role"] == "slider"]
+    assert sliders, f"{name}: no slider"
+    for c in sliders:
+        # Chromium's DevTools tree leaves its "valuetext" property empty even where the
+        # platform tree says aria-valuetext, so the attribute itself is read
+        text = c["valuetext"] or ""
+        assert text.startswith(c["readout"]), \
+            f"{name}: '{c['label']}' says {text!r}, shows {c['readout']!r}"
+        assert not re.search(r"\.\d{5,}", text), f"{name}: float noise in {text!r}"
+        unit = _UNIT.search(c["label"])
+        if unit:
+            want = unit.group(1) or "degrees"
+            assert text.endswith(" " + want), f"{name}: '{c['label']}' says {text!r}, no unit"
+
+
+def test_the_chosen_toggle_is_exposed(ran):
+    """ToggleButtons (q4's spline kind and end rule): the chosen button is pressed in the
+    accessibility tree, the others not, and a key press moves the pressed state."""
+    name, page = ran
+    out = _explorer(page)
+    toggles = [(c, ax) for c, ax in _controls(page, out) if c["toggle"]]
+    if not toggles:
+        pytest.skip(f"{name}: no toggle buttons")
+    for c, ax in toggles:
+        assert ax.get("pressed") == ("true" if c["pressed"] else "false"), (c, ax)
+    assert out.locator(".widget-toggle-buttons[role=group][aria-label]").count() >= 1
+    first_off = next(c for c, _ in toggles if not c["pressed"])
+    out.locator(f'[data-a11y-ctl="{first_off["i"]}"]').focus()
+    page.keyboard.press("Space")
+    cdp = page.context.new_cdp_session(page)
+    deadline = time.monotonic() + 10
+    while _ax_node(page, cdp, first_off["i"]).get("pressed") != "true":
+        assert time.monotonic() < deadline, f"{name}: the chosen toggle is not exposed as pressed"
+        time.sleep(0.2)
+
+
+def test_arrow_keys_stay_in_the_explorer(ran):
+    """ArrowUp/Down on the closed "move" drop-down (q4, q6) change its choice and leave the
+    focus on it (not JupyterLab's move to another cell); the same for a slider's handle."""
+    name, page = ran
+    out = _explorer(page)
+    selects = out.locator("select")
+    targets = ([selects.first] if selects.count() else []) + [out.locator("[role=slider]").first]
+    value = "el => el.tagName === 'SELECT' ? el.value : el.getAttribute('aria-valuenow')"
+    for target in targets:
+        target.focus()
+        seen = {target.evaluate(value)}
+        # one of the two keys moves a drop-down whatever its choice; on a slider (moved by
+        # arrows in test_explorer_by_keyboard_only) Up/Down must not take the focus away
+        keys = ("ArrowUp", "ArrowDown", "ArrowDown", "ArrowUp")
+        is_select = target.evaluate("el => el.tagName === 'SELECT'")
+        for key in keys:
+            page.keyboard.press(key)
+            assert target.evaluate("el => document.activeElement === el"), \
+                f"{name}: {key} took the focus out of the explorer ({_focused(page)})"
+            deadline = time.monotonic() + 3
+            while is_select and len(seen) < 2 and time.monotonic() < deadline:
+                seen.add(target.evaluate(value))
+                time.sleep(0.1)
+        assert len(seen) >= 2 or not is_select, f"{name}: the arrow keys did not change {seen}"

@@ -141,3 +141,15 @@ def test_update_is_fast(default):
 def test_bad_polygon():
     with pytest.raises(ValueError):
         ClippingExplorer(np.ones((2, 4)))
+
+
+def test_a_one_line_summary_is_announced_not_the_vertex_table(exam):
+    """Q6(b): the live region says the step in one line (the exam's triangle: 3 vertices as
+    input); the vertex table beside it is read on demand, not announced on every move."""
+    exam.widget()
+    assert "course-live" in exam.summary._dom_classes
+    assert "course-live" not in exam.readout._dom_classes
+    assert exam.summary.value.startswith(f"input: {len(A_H)} vertices")
+    assert "<" not in exam.summary.value and "\n" not in exam.summary.value
+    exam.step.value = 1
+    assert exam.summary.value.startswith("after plane 1 of 6")

@@ -67,6 +67,15 @@ def test_palette_colours_stay_apart(name, condition):
         f"{name}: {a} and {b} are only {distance:.1f} apart (CAM02-UCS) under {condition}"
 
 
+DENSE_POINTS = 200
+_PLOTTED: dict = {}
+
+
+def _plotted(handle):
+    """The data of the plotted line a legend handle stands for (a handle is a copy)."""
+    return _PLOTTED.get(id(handle), handle.get_xdata())
+
+
 def _style(handle) -> tuple:
     """What tells a legend entry apart besides its colour."""
     from matplotlib.collections import Collection
@@ -75,6 +84,10 @@ def _style(handle) -> tuple:
 
     if isinstance(handle, Line2D):
         ls = handle.get_linestyle() if handle.get_linewidth() > 0 else "None"
+        # a dash pattern cannot be seen along a jagged line of many samples (an echo trace):
+        # there only a marker or a line width tells it apart
+        if len(_plotted(handle)) > DENSE_POINTS:
+            ls = "dense"
         marker = handle.get_marker() if handle.get_marker() not in ("", " ", None) else "None"
         return ("line", ls, marker, round(float(handle.get_linewidth()), 1),
                 handle.get_markerfacecolor() == "none")
@@ -103,6 +116,10 @@ def test_legend_entries_differ_by_more_than_colour(draw):
                 legend = ax.get_legend()
                 if legend is None:
                     continue
+                plotted = {ln.get_label(): ln for ln in ax.get_lines()}
+                for t, h in zip(legend.get_texts(), legend.legend_handles):
+                    if t.get_text() in plotted:
+                        _PLOTTED[id(h)] = plotted[t.get_text()].get_xdata()
                 entries = [(t.get_text(), _style(h))
                            for t, h in zip(legend.get_texts(), legend.legend_handles)]
                 for (a, sa), (b, sb) in itertools.combinations(entries, 2):

@@ -212,3 +212,40 @@ def test_arrow_keys_turn_a_3d_view_as_dragging_does():
     flat = phong_explorer()
     assert flat.widget is not None
     assert not flat._view.widget(flat.fig).turnable
+
+
+def test_a_curve_is_described_as_the_axes_show_it():
+    """A trace drawn down to -120 on an axis cut at -100 reads -100 (what is shown); a
+    computed zero reads 0, not rounding noise; a rectangle is a closed outline with its
+    extent; a lone point is a point; a crowd of unnamed lines is not counted aloud."""
+    fig, ax = plt.subplots()
+    x = np.linspace(0.0, 10.0, 101)
+    ax.plot(x, np.where(x < 5, -120.0, -20.0), label="echo")
+    ax.plot([np.cos(np.pi / 2), 4.0], [0.0, -50.0], label="guide")    # cos(pi/2) = 6.1e-17
+    ax.plot([2, 4, 4, 2, 2], [-60, -60, -40, -40, -60], label="box")
+    ax.plot([3, 3], [-30, -30], label="spot")
+    for k in range(6):
+        ax.plot([k, k + 1], [-90, -90], color="k")
+    ax.set_xlim(0, 10)
+    ax.set_ylim(-100, 0)
+    text = alt_text(fig)
+    assert "'echo' from (0, -100) to (10, -20)" in text and "lowest -100" in text
+    assert "-120" not in text
+    assert "'guide' through (0, 0), (4, -50)" in text and "e-17" not in text
+    assert "'box', a closed outline over x 2 to 4, y -60 to -40" in text
+    assert "'spot' at the point (3, -30)" in text
+    assert "unnamed" not in text
+
+
+def test_phong_vectors_give_each_arrow_its_direction():
+    """Q5(a) with L 40 degrees left of N and V 15 degrees right: R mirrors L (40 right) and
+    H bisects L and V ((40 - 15) / 2 = 12.5 degrees left)."""
+    from course_lib.plots.shading import plot_reflection_vectors
+
+    fig, ax = plt.subplots()
+    plot_reflection_vectors(40.0, -15.0, ax=ax)
+    text = alt_text(fig)
+    assert "L (towards the light) 40 degrees left of N" in text
+    assert "R (the mirror reflection of L) 40 degrees right of N" in text
+    assert "V (towards the viewer) 15 degrees right of N" in text
+    assert "H (halfway between L and V) 12.5 degrees left of N" in text

@@ -18,6 +18,7 @@ from course_lib.plots import splines as plots
 from course_lib.widgets.splines import (
     SplineEndExplorer,
     combination_tex,
+    end_summary,
     spline_end_explorer,
 )
 
@@ -226,3 +227,18 @@ def test_blending_functions_figure():
     np.testing.assert_allclose(bs[:, -1], [0, 1 / 6, 4 / 6, 1 / 6], atol=1e-12)
     np.testing.assert_allclose(cr[:, -1], [0, 0, 1, 0], atol=1e-12)
     plt.close(fig)
+
+
+def test_the_announced_summary_states_the_end_values():
+    """Q4(c): a B-spline ended by d = 2c - b has p(1) = (b + 4c + d)/6 = c and
+    p''(1) = b - 2c + d = 0; the one line a screen reader hears says so, in two decimals."""
+    e = spline_end_explorer(P.copy(), kind="b-spline", rule="d=2c-b")
+    try:
+        line = e.summary.value
+        assert line == end_summary("b-spline", "d=2c-b", e.scene["end"])
+        assert f"p = ({C[0]:.2f}, {C[1]:.2f})" in line
+        assert "p'' = (0.00, 0.00)" in line or "p'' = (-0.00, 0.00)" in line
+        assert e.widget is not None   # building the layout marks its readouts live
+        assert "course-live" in e.summary._dom_classes
+    finally:
+        plt.close(e.fig)
