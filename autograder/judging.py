@@ -204,7 +204,7 @@ def call_in_process(func, case, index: int = 0) -> CaseOutcome:
 def summarise(records: list[CaseRecord], points: float,
               kind: CellKind = CellKind.FUNCTION) -> tuple[float, Status, str]:
     """``(score, status, message)`` of a test cell: ``points × passed / cases``, where a
-    function's bad-input cases count only once one of its ordinary cases passes
+    function's bad-input cases count in proportion to the hidden ordinary cases it passes
     (:func:`bad_input_withheld`); the status names the most serious failure
     (:data:`~autograder.model.SEVERITY`)."""
     n = len(records)
@@ -219,7 +219,7 @@ def summarise(records: list[CaseRecord], points: float,
         ref = next(r for r in records if r.verdict is Verdict.REFERENCE_USED)
         return 0.0, Status.REFERENCE_USED, (f"{clip(ref.reason, 160)}: a graded function must "
                                             "be your own work, so this test scores 0")
-    withheld = bad_input_withheld(records) if kind is CellKind.FUNCTION else 0
+    withheld = bad_input_withheld(records) if kind is CellKind.FUNCTION else 0.0
     score = round(points * (passed - withheld) / n, 6)
     if kind in (CellKind.CHOICE, CellKind.VALUE):
         return score, _status_of(counts) if counts else Status.OK, \
@@ -228,9 +228,9 @@ def summarise(records: list[CaseRecord], points: float,
         return score, Status.OK, f"all {n} cases passed"
     parts = [f"{c} {VERDICT_WORDS[v]}" for v, c in sorted(counts.items(), key=lambda x: -x[1])]
     msg = f"{passed} of {n} cases passed ({', '.join(parts)})"
-    if withheld:
-        msg += (f"; the {withheld} bad-input case(s) it passed (raising ValueError) count only "
-                "once it also answers an ordinary case right, so this test scores 0")
+    if withheld > 1e-9:
+        msg += ("; the bad-input cases it passed (raising ValueError) count only in proportion "
+                "to the hidden ordinary cases it answers right")
     first = next((r for r in records if r.verdict is not Verdict.PASS and r.visible), None)
     if first is not None:
         msg += f"; e.g. {first.label or 'a visible case'}: {clip(first.reason, 200)}"
@@ -240,17 +240,22 @@ def summarise(records: list[CaseRecord], points: float,
     return score, _status_of(counts), msg
 
 
-def bad_input_withheld(records: list[CaseRecord]) -> int:
-    """How many passed cases of a graded function do not count: its bad-input cases (those
-    where raising is the right answer, ``record.raises``) count only once it passes at least
-    one ordinary case of the same grading, so raising ``ValueError`` on every input earns
-    nothing (Q1-Q6: the "bad input raises ``ValueError``" convention of every notebook).
+def bad_input_withheld(records: list[CaseRecord]) -> float:
+    """How many of the passed cases of a graded function do not count: its bad-input cases
+    (those where raising is the right answer, ``record.raises``) count in proportion to the
+    share of its *hidden* ordinary cases it answers right (Q1-Q6: the "bad input raises
+    ``ValueError``" convention of every notebook). So raising ``ValueError`` on every input
+    earns nothing for them, nor does answering only the visible cases (whose values the
+    notebook and the page show) from a table and raising on the rest, as a red team did.
 
-    A function whose cases all must raise keeps them (the rule needs an ordinary case)."""
+    Without hidden cases (a student's own ``check``) the visible ordinary cases stand in; a
+    function whose cases all must raise keeps them (the rule needs an ordinary case)."""
     ordinary = [r for r in records if not r.raises]
-    if not ordinary or any(r.verdict is Verdict.PASS for r in ordinary):
-        return 0
-    return sum(r.verdict is Verdict.PASS for r in records if r.raises)
+    if not ordinary:
+        return 0.0
+    hidden = [r for r in ordinary if not r.visible] or ordinary
+    share = sum(r.verdict is Verdict.PASS for r in hidden) / len(hidden)
+    return sum(r.verdict is Verdict.PASS for r in records if r.raises) * (1.0 - share)
 
 
 def _status_of(counts: dict[Verdict, int]) -> Status:

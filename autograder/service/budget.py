@@ -19,7 +19,9 @@ from pathlib import Path
 
 from ..grade.batch import Options, grade_batch
 from ..course import ASSIGNMENT
-from ..model import SourceNotebook
+from ..isolation.inside.supervisor import GRACE, TIMEOUTS_IN_A_ROW
+from ..exercises import REGISTRY
+from ..model import CellKind, SourceNotebook
 from .policy import Policy
 
 #: the folder name the reference is graded under (never a student's: ids have no dash first)
@@ -44,6 +46,24 @@ def measure(sources: list[SourceNotebook], opts: Options) -> dict[str, float]:
         shutil.rmtree(folder, ignore_errors=True)
 
 
-def budgets(costs: dict[str, float], policy: Policy) -> dict[str, float]:
-    """``{notebook: job timeout in seconds}`` from measured costs (see the module docstring)."""
-    return {name: max(policy.floor_seconds, policy.margin * cost) for name, cost in costs.items()}
+def hang_allowance(sources: list[SourceNotebook], case_timeout: float) -> dict[str, float]:
+    """``{notebook: seconds}`` the sandbox may spend stopping graded functions that hang: each
+    is stopped after :data:`TIMEOUTS_IN_A_ROW` cases of ``case_timeout`` (plus the
+    supervisor's grace). Added to a budget, a hanging function costs its own points only,
+    as it does under ``grade`` (an instructor's playtest: two hung cases used up a 20 s budget
+    and a correct function beside them scored 0)."""
+    per_function = TIMEOUTS_IN_A_ROW * (case_timeout + GRACE)
+    def runs_code(name: str) -> bool:   # as the batch judges it: an unknown name is a function
+        return getattr(REGISTRY.get(name), "kind", CellKind.FUNCTION) is CellKind.FUNCTION
+
+    return {s.name: per_function * sum(runs_code(g.name) for g in s.graded) for s in sources}
+
+
+def budgets(costs: dict[str, float], policy: Policy,
+            allowance: dict[str, float] | None = None) -> dict[str, float]:
+    """``{notebook: job timeout in seconds}``: ``max(floor_seconds, margin x cost)`` from the
+    measured costs (see the module docstring), plus the notebook's ``allowance`` for hangs
+    (:func:`hang_allowance`), which an honest notebook never uses."""
+    extra = allowance or {}
+    return {name: max(policy.floor_seconds, policy.margin * cost) + extra.get(name, 0.0)
+            for name, cost in costs.items()}

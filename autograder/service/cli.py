@@ -120,7 +120,7 @@ def build(args) -> Service:
                    secret=secret, mode=mode, progress=False)
     costs = ({s.name: args.reference_seconds for s in sources}
              if args.reference_seconds else budget.measure(sources, opts))
-    budgets = budget.budgets(costs, policy)
+    budgets = budget.budgets(costs, policy, budget.hang_allowance(sources, args.timeout))
     print("time budget per notebook: " + ", ".join(f"{k} {v:.0f} s (reference {costs[k]:.1f} "
           f"s)" for k, v in budgets.items()), file=sys.stderr)
     db_url = None if args.no_gradebook else (args.db_url or default_db_url(args.course))

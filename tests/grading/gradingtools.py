@@ -185,6 +185,18 @@ def cases_of(student: str, name: str, nb, secret: bytes = SECRET):
     return ex.draw_cases(np.random.default_rng(seed))
 
 
+def counted_cases(cases, passes) -> float:
+    """How many of ``cases`` count when those flagged in ``passes`` pass, by the rule each
+    notebook's first cell states (not read from the grader): bad-input cases count in
+    proportion to the share of hidden ordinary cases passed (the visible ones when no
+    ordinary case is hidden)."""
+    ordinary = [p for c, p in zip(cases, passes) if c.raises is None]
+    hidden = [p for c, p in zip(cases, passes) if c.raises is None and not c.visible] or ordinary
+    share = sum(hidden) / len(hidden) if hidden else 1.0
+    bad = sum(p for c, p in zip(cases, passes) if c.raises is not None)
+    return sum(ordinary) + bad * share
+
+
 def typed_version(nb: dict, student: str) -> dict:
     """``nb`` with every choice and number item that the model answer *computes* from ``mine``
     typed out as a literal for ``student``: what a student hands in (the grader reads typed

@@ -8,7 +8,7 @@ kind" batch of the issue: it must finish in bounded time with everyone else's sc
 
 The expected values are decided here, not read from the grader: full points from the *source*
 notebook's test cells, 0 where tampering was attempted (raising ValueError on every input
-included: bad-input cases count only once an ordinary case passes), and partial credit from
+included: bad-input cases count in proportion to the hidden ordinary cases passed), and partial credit from
 the registry's case list drawn with the grader's documented seed (``case_seed(secret, student,
 name)``).
 """
@@ -28,7 +28,7 @@ from pathlib import Path
 
 import pytest
 from gradingtools import (expect_all, expect_full_marks, points_of,
-                          CASE_TIMEOUT, SECRET, append_cell, cases_of, cell_index,
+                          CASE_TIMEOUT, SECRET, append_cell, cases_of, cell_index, counted_cases,
                           course_sources, gradebook_grades, model_version, read_grades,
                           release_version, run_grade, set_cell, target_of, write_nb)
 
@@ -346,7 +346,7 @@ def _old_format(src, ctx):
 
 def _partial_expect(src, ctx):
     """Raising ValueError on every input passes exactly the bad-input cases, and those count
-    only once an ordinary case passes: 0, unless every case of the function must raise."""
+    in proportion to the hidden ordinary cases passed: 0."""
     name = target_of(src)
     cases = cases_of(ctx.student, name, _submitted_nb(ctx, src))
     raising = sum(c.raises is not None and issubclass(ValueError, c.raises) for c in cases)
@@ -361,11 +361,14 @@ def _crash_expect(src, ctx):
     """Every third call in a process is killed; the grader restarts the child (three processes
     at most) from the case after the crash, so with cases 0..n-1 the passes are 0,1 | 3,4 | 6,7."""
     name = target_of(src)
-    n = len(cases_of(ctx.student, name, _submitted_nb(ctx, src)))
-    passed = sum(1 for i in range(n) if i < 9 and i % 3 != 2)
+    cases = cases_of(ctx.student, name, _submitted_nb(ctx, src))
+    n = len(cases)
+    passes = [i < 9 and i % 3 != 2 for i in range(n)]
     exp = expect_full_marks(src)
-    exp[f"test_{name}"] = (points_of(src, name) * passed / n, "error" if passed < n else "ok")
+    exp[f"test_{name}"] = (points_of(src, name) * counted_cases(cases, passes) / n,
+                           "error" if sum(passes) < n else "ok")
     return exp
+
 
 
 def _tamper_expect(src, ctx):

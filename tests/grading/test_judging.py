@@ -233,7 +233,7 @@ def test_a_notebook_of_countless_empty_cells_is_unreadable_at_once(tmp_path):
 
 
 # --------------------------------------------------------------------------------------------
-# bad-input cases count only once an ordinary case passes
+# bad-input cases count in proportion to the hidden ordinary cases passed
 
 
 def _rec(i, verdict, raises=""):
@@ -246,15 +246,37 @@ def test_raising_on_every_input_scores_nothing():
                _rec(3, Verdict.PASS, "ValueError"), _rec(4, Verdict.PASS, "ValueError")]
     score, status, message = summarise(records, 5.0)
     assert score == 0.0 and status is Status.ERROR
-    assert "count only once" in message
+    assert "in proportion" in message
 
 
-def test_bad_input_cases_count_once_one_ordinary_case_passes():
-    records = [_rec(0, Verdict.PASS), _rec(1, Verdict.ERROR), _rec(2, Verdict.WRONG_VALUE),
+def test_bad_input_cases_count_in_proportion_to_the_hidden_ordinary_cases_passed():
+    # 3 ordinary cases (1 visible passed; hidden: 1 of 2 passed), 2 bad-input cases passed:
+    # the bad-input cases count half, so 1 + 1 + 2 x 1/2 = 3 of 5 cases
+    records = [_rec(0, Verdict.PASS), _rec(1, Verdict.PASS), _rec(2, Verdict.WRONG_VALUE),
                _rec(3, Verdict.PASS, "ValueError"), _rec(4, Verdict.PASS, "ValueError")]
+    for r in records[1:]:
+        r.visible = False
     score, status, message = summarise(records, 5.0)
-    assert score == pytest.approx(3.0, abs=1e-9)       # 3 of 5 cases, the 2 raising included
-    assert "count only once" not in message
+    assert score == pytest.approx(3.0, abs=1e-9)
+    assert "in proportion" in message
+
+
+def test_visible_cases_from_a_table_unlock_no_bad_input_case():
+    """A red team answered the visible cases (shown on the page) from a table and raised on
+    everything else: its bad-input cases earn nothing, only the visible cases count."""
+    records = [_rec(0, Verdict.PASS), _rec(1, Verdict.ERROR), _rec(2, Verdict.ERROR),
+               _rec(3, Verdict.PASS, "ValueError"), _rec(4, Verdict.PASS, "ValueError")]
+    for r in records[1:]:
+        r.visible = False
+    assert summarise(records, 5.0)[0] == pytest.approx(1.0, abs=1e-9)
+
+
+def test_all_hidden_ordinary_cases_passed_keep_every_bad_input_case():
+    records = [_rec(0, Verdict.WRONG_VALUE), _rec(1, Verdict.PASS),
+               _rec(2, Verdict.PASS, "ValueError")]
+    for r in records[1:]:
+        r.visible = False
+    assert summarise(records, 3.0)[0] == pytest.approx(2.0, abs=1e-9)
 
 
 def test_a_function_whose_cases_all_must_raise_keeps_them():
