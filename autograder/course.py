@@ -271,13 +271,15 @@ def prepare_course(
         db_url=db_url,
     )
     root.mkdir(parents=True, exist_ok=True)
-    with _locked(root / ".prepare.lock"):
+    with file_lock(root / ".prepare.lock"):
         return _prepare(course, notebooks, names)
 
 
 @contextlib.contextmanager
-def _locked(path: Path):
-    """An exclusive lock on ``path`` (two commands preparing one course wait for each other)."""
+def file_lock(path: Path):
+    """An exclusive lock on the file ``path``, held for the ``with`` block (two commands
+    preparing one course, two builds of the students' wheel, two service workers writing one
+    gradebook: each waits for the other)."""
     try:
         import fcntl
     except ImportError:  # not POSIX: no lock

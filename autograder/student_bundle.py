@@ -40,7 +40,7 @@ from pathlib import Path
 
 from packaging.requirements import Requirement
 
-from .course import REPO_ROOT, _locked
+from .course import REPO_ROOT, file_lock
 
 LIBRARY = "course_lib"
 LIBRARY_DIR = REPO_ROOT / LIBRARY
@@ -403,7 +403,7 @@ def build_wheel(cache_dir: Path) -> Path:
     digest = sources_digest()
     target = Path(cache_dir).resolve() / digest[:16]
     target.parent.mkdir(parents=True, exist_ok=True)
-    with _locked(target.parent / ".build.lock"):
+    with file_lock(target.parent / ".build.lock"):
         built = sorted(target.glob("*.whl"))
         if len(built) == 1:
             return built[0]
@@ -451,7 +451,7 @@ def ensure_student_env(env_dir: Path, wheel: Path, base_python: str | None = Non
     """
     env_dir = Path(env_dir).resolve()
     env_dir.mkdir(parents=True, exist_ok=True)  # ``venv`` fills an existing folder
-    with _locked(env_dir / ".student-env.lock"):
+    with file_lock(env_dir / ".student-env.lock"):
         python = env_python(env_dir)
         if not python.exists():
             base = base_python or getattr(sys, "_base_executable", sys.executable)

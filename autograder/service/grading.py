@@ -8,10 +8,8 @@ one transaction: :mod:`.journal`).
 
 from __future__ import annotations
 
-import contextlib
 import datetime as dt
 import errno
-import fcntl
 import hashlib
 import json
 import shutil
@@ -20,6 +18,7 @@ import traceback
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from ..course import file_lock
 from ..grade.batch import Options, grade_batch
 from ..model import Batch, CellKind, CellResult, SourceNotebook, Status
 from ..outputs import gradebook
@@ -276,14 +275,7 @@ def _record(svc: Service, student: str, collected: Path, counting: list[str],
                        db_url=svc.db_url)
 
 
-@contextlib.contextmanager
 def _gradebook_turn(svc: Service):
     """One worker process at a time writes the gradebook: two writers of a SQLite gradebook
     would meet its lock (nbgrader's engine waits only seconds) and retry the whole submission."""
-    path = Path(svc.course) / "service" / "gradebook.lock"
-    with open(path, "a") as fh:
-        fcntl.flock(fh, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(fh, fcntl.LOCK_UN)
+    return file_lock(Path(svc.course) / "service" / "gradebook.lock")
