@@ -46,17 +46,26 @@ def measure(sources: list[SourceNotebook], opts: Options) -> dict[str, float]:
         shutil.rmtree(folder, ignore_errors=True)
 
 
+#: graded functions of one notebook whose hangs the budget makes room for: a student's one or
+#: two endless loops cost those functions' points only, while a notebook written to hang holds a
+#: worker at most this many functions' stopping time longer (a live red team held one for 318 s
+#: with room for all nine of q3's)
+HANGS_ALLOWED = 2
+
+
 def hang_allowance(sources: list[SourceNotebook], case_timeout: float) -> dict[str, float]:
     """``{notebook: seconds}`` the sandbox may spend stopping graded functions that hang: each
     is stopped after :data:`TIMEOUTS_IN_A_ROW` cases of ``case_timeout`` (plus the
-    supervisor's grace). Added to a budget, a hanging function costs its own points only,
-    as it does under ``grade`` (an instructor's playtest: two hung cases used up a 20 s budget
-    and a correct function beside them scored 0)."""
+    supervisor's grace), room for :data:`HANGS_ALLOWED` of them. Added to a budget, one or two
+    hanging functions cost their own points only, as under ``grade`` (an instructor's
+    playtest: two hung cases used up a 20 s budget and a correct function beside them scored 0)."""
     per_function = TIMEOUTS_IN_A_ROW * (case_timeout + GRACE)
+
     def runs_code(name: str) -> bool:   # as the batch judges it: an unknown name is a function
         return getattr(REGISTRY.get(name), "kind", CellKind.FUNCTION) is CellKind.FUNCTION
 
-    return {s.name: per_function * sum(runs_code(g.name) for g in s.graded) for s in sources}
+    return {s.name: per_function * min(HANGS_ALLOWED, sum(runs_code(g.name) for g in s.graded))
+            for s in sources}
 
 
 def budgets(costs: dict[str, float], policy: Policy,

@@ -4,6 +4,7 @@ unchanged notebooks free, the time budget, and ``python -m autograder watch``.""
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 
 import pytest
 from gradingtools import function_names
@@ -85,16 +86,19 @@ def test_budgets_come_from_the_reference_cost(q1, mode):
     assert got == {"a": 20.0, "b": 70.0}
 
 
-def test_a_budget_leaves_room_for_every_graded_function_to_hang(q1):
-    """Each graded function may hang (stopped after three cases of the per-case limit, plus the
-    supervisor's one-second grace each) and the notebook's budget still reaches the next
-    function, so a hang costs only its own points (as under ``grade``)."""
+def test_a_budget_leaves_room_for_two_graded_functions_to_hang(q1):
+    """Two graded functions may hang (each stopped after three cases of the per-case limit, plus
+    the supervisor's one-second grace each) and the notebook's budget still reaches the next
+    function, so a hang costs only its own points (as under ``grade``); a notebook of one
+    function gets room for one."""
     functions = function_names(q1)      # choice and number items run no student code
     assert 2 <= len(functions) < len(q1.graded)
     allowance = budget.hang_allowance([q1], case_timeout=10.0)
-    assert allowance == {q1.name: pytest.approx(len(functions) * 3 * (10.0 + 1.0))}
+    assert allowance == {q1.name: pytest.approx(2 * 3 * (10.0 + 1.0))}
     got = budget.budgets({q1.name: 1.0}, Policy(margin=10, floor_seconds=20), allowance)
-    assert got[q1.name] == pytest.approx(20.0 + len(functions) * 33.0)
+    assert got[q1.name] == pytest.approx(20.0 + 2 * 33.0)
+    one = replace(q1, graded=[g for g in q1.graded if g.name == functions[0]])
+    assert budget.hang_allowance([one], case_timeout=10.0) == {q1.name: pytest.approx(33.0)}
 
 
 def test_watch_once_from_the_command_line(tmp_path, q1, mode, capsys, monkeypatch):
@@ -117,8 +121,8 @@ def test_watch_once_from_the_command_line(tmp_path, q1, mode, capsys, monkeypatc
                    "--secret-file", str(tmp_path / "secret"), "--source", str(q1.path.parent)])
     err = capsys.readouterr().err
     assert status == 0, err
-    # the floor (20 s) plus room for each graded function to hang: 3 cases of 10 s + 1 s grace
-    budget_q1 = 20 + 33 * len(function_names(q1))
+    # the floor (20 s) plus room for two graded functions to hang: 3 cases of 10 s + 1 s grace
+    budget_q1 = 20 + 2 * 33
     assert "time budget per notebook" in err and f"q1_imaging {budget_q1} s" in err
     assert "root: graded q1_imaging" in err
     assert exchange_page(Svc, folder, q1.name).count(attempts_line(2, 3)) == 1
