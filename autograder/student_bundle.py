@@ -59,7 +59,6 @@ STILL_SHIPPED = frozenset({
     "end_derivatives", "end_rows", "parameter_row", "phantom_point",      # q4 explorer, figures
     "catmull_rom_basis", "bspline_basis",                                 # q4 splines.basis
     "normalize", "reflect", "halfway", "phong", "blinn_phong",            # q5 Phong explorer
-    "clip_polygon", "fan_triangulate", "inside_view_volume", "screen_area", "to_screen",  # q6
 })
 #: helpers the students' wheel leaves out with the graded functions: each computes a left-out
 #: function's answer (or part of it) or calls one; ``{module: (function, ...)}``
@@ -67,13 +66,20 @@ LEFT_OUT_HELPERS = {
     "course_lib.marching_cubes": (
         "_check_volume", "_active_cells", "_march", "_axis_vertices", "marching_cubes_loop",
         "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation"),
+    "course_lib.clipping": ("clip_against_plane", "clip_steps", "clip_polygons", "_clip_array",
+                            "_clip_plane_array", "_clip_batch", "_clip_rows"),
+}
+#: shipped routines that compute with left-out functions yet answer no graded question (they
+#: return only display-precision numbers and text): ``{module: (qualname, ...)}``
+INLINE_INTO = {
+    "course_lib.widgets.clipping": ("clip_display",),
 }
 #: modules the students' wheel does not carry at all (nothing of the students' copy needs
 #: them; no shipped module may import them)
-INSTRUCTORS_ONLY = ("course_lib.mesh",)
+INSTRUCTORS_ONLY = ("course_lib.mesh", "course_lib._polygons")
 #: modules whose students' copy is generated when the wheel is built: the text their
 #: ``students_copy()`` returns (e.g. the results of the references on a figure's fixed inputs)
-GENERATED_MODULES = ("course_lib._mc_results_data",)
+GENERATED_MODULES = ("course_lib._mc_results_data", "course_lib._clip_results_data")
 #: the instructors' requirements a student's environment needs (versions come from our own
 #: package metadata, so the two never disagree)
 STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "anywidget", "jupyterlab",

@@ -3,15 +3,19 @@
 What happens to a polygon once it is clipped and divided by ``w``: its signed area (the
 shoelace sum that :func:`course_lib.clipping.screen_area` grades), whether it is convex, its
 triangulation when it is not (:func:`ear_clip`), and its spans on a scanline when it is not a
-triangle (:func:`polygon_spans`). The public names are imported from
-:mod:`course_lib.clipping`, which re-exports them; this module keeps the view volume's file
-to the clipping itself.
+triangle (:func:`polygon_spans`).
+
+Instructors only: the shoelace sum is :func:`course_lib.clipping.screen_area`'s answer and a
+triangle's span is :func:`course_lib.clipping.scanline_span`'s, so the students' wheel does not
+carry this module (``INSTRUCTORS_ONLY`` in :mod:`autograder.student_bundle`); the notebook's
+fixed examples of it (the comb, the star) come from :mod:`course_lib.clip_results`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ._raster import _cross
 from ._validate import as_points, as_scalar
 
 __all__ = ["ear_clip", "is_convex", "polygon_area", "polygon_spans", "shoelace_area"]
@@ -52,12 +56,6 @@ def polygon_area(poly_xy) -> float:
     """
     p = _polygon2(poly_xy)
     return shoelace_area(p[:, 0], p[:, 1])
-
-
-def _cross(o, a, b):
-    """z-component of ``(a - o) x (b - o)``, broadcasting over leading axes."""
-    return (a[..., 0] - o[..., 0]) * (b[..., 1] - o[..., 1]) - \
-        (a[..., 1] - o[..., 1]) * (b[..., 0] - o[..., 0])
 
 
 def is_convex(poly_xy) -> bool:

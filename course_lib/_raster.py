@@ -10,10 +10,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._polygons import _cross
 from ._validate import as_int, as_points
 
 __all__ = ["rasterize_triangle", "triangle_spans"]
+
+
+def _cross(o, a, b):
+    """z-component of ``(a - o) x (b - o)``, broadcasting over leading axes."""
+    return (a[..., 0] - o[..., 0]) * (b[..., 1] - o[..., 1]) - \
+        (a[..., 1] - o[..., 1]) * (b[..., 0] - o[..., 0])
 
 
 def rasterize_triangle(tri_xy, width, height) -> np.ndarray:

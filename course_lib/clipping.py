@@ -20,14 +20,19 @@ The exam's triangles:
     :func:`perspective_matrix` (camera coordinates to homogeneous 3D screen coordinates) and
     :data:`EXAM_Q6`, the triangles A and B of Q6(b) in camera coordinates and, through the
     matrix, in homogeneous screen coordinates.
-Further tools used by the figures, the explorer and the "going further" section:
+Further tools, for the explorer and the "going further" section:
     :func:`clip_polygons` (many polygons in one call), :func:`clip_against_plane`,
-    :func:`clip_steps` (the polygon after each of the six planes),
-    :func:`polygon_area`, :func:`is_convex`, :func:`ear_clip` (triangulation of simple, possibly
-    non-convex polygons), :func:`polygon_spans` (several spans on one scanline), written in
-    :mod:`course_lib._polygons`; :func:`rasterize_triangle` and :func:`triangle_spans` (a
-    scanline rasteriser with the top-left fill rule), written in :mod:`course_lib._raster`.
-    All are imported from here.
+    :func:`clip_steps` (the polygon after each of the six planes); :func:`rasterize_triangle`
+    and :func:`triangle_spans` (a scanline rasteriser with the top-left fill rule), written in
+    :mod:`course_lib._raster` and imported from here. Area, convexity, ear clipping and the
+    spans of a polygon are in :mod:`course_lib._polygons`.
+
+The students' copy
+------------------
+The students' wheel carries this module without the graded functions and the clipping
+machinery (``LEFT_OUT_HELPERS`` in :mod:`autograder.student_bundle`): the explorer gets its
+steps, at display precision, from :func:`course_lib.widgets.clipping.clip_display`, and the
+notebook's fixed examples from :mod:`course_lib.clip_results` (docs/students-copy.md).
 
 Speed
 -----
@@ -57,7 +62,6 @@ import math
 
 import numpy as np
 
-from ._polygons import ear_clip, is_convex, polygon_area, polygon_spans, shoelace_area
 from ._raster import rasterize_triangle, triangle_spans
 from ._validate import as_float_array, as_int, as_points, as_scalar, as_vectors
 
@@ -69,13 +73,9 @@ __all__ = [
     "clip_polygon",
     "clip_polygons",
     "clip_steps",
-    "ear_clip",
     "fan_triangulate",
     "inside_view_volume",
-    "is_convex",
     "perspective_matrix",
-    "polygon_area",
-    "polygon_spans",
     "rasterize_triangle",
     "scanline_span",
     "screen_area",
@@ -384,6 +384,8 @@ def screen_area(P_screen) -> float:
         raise ValueError(f"P_screen must have shape (n, 3) or (n, 2), got shape {P.shape}")
     if len(P) < 3:
         return 0.0
+    from ._polygons import shoelace_area       # instructors only, as this function
+
     return shoelace_area(P[:, 0], P[:, 1])
 
 
@@ -409,7 +411,8 @@ def fan_triangulate(m) -> np.ndarray:
     -----
     Q6(c): a clipped convex polygon is split into triangles right after clipping. Fanning from
     vertex 0 is correct for any convex polygon because the segment from vertex 0 to every other
-    vertex lies inside it. For a non-convex polygon use :func:`ear_clip`.
+    vertex lies inside it. A non-convex polygon needs ear clipping
+    (:func:`course_lib._polygons.ear_clip`).
 
     Examples
     --------
@@ -453,7 +456,7 @@ def scanline_span(tri_xy, y):
     that the line meets (``min(a_y, b_y) <= y <= max(a_y, b_y)``) contributes
     ``x = a_x + (y - a_y)(b_x - a_x) / (b_y - a_y)`` (both ends if the edge is horizontal);
     the span runs from the smallest to the largest. A non-convex polygon can have several
-    spans on one line (:func:`polygon_spans`).
+    spans on one line (:func:`course_lib._polygons.polygon_spans`).
 
     Examples
     --------

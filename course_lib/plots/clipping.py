@@ -3,6 +3,10 @@
 Every function takes an optional ``ax`` (a 3-D axes for :func:`plot_view_volume` and
 :func:`plot_clipping_3d`) and returns a dict of the artists it drew, so that the clipping explorer
 (:mod:`course_lib.widgets.clipping`) can update them in place.
+
+The figures draw what they are given (a clipped polygon, triangles, spans: from
+:mod:`course_lib.clip_results` for the notebook's fixed examples) and compute no graded answer:
+points are divided by ``w`` only at display precision (:func:`display_round`).
 """
 
 from __future__ import annotations
@@ -43,13 +47,30 @@ def _box_edges() -> list[np.ndarray]:
     return edges
 
 
+def display_round(x) -> np.ndarray:
+    """``x`` rounded for drawing: to 1e-4 below 10 (1/20000 of the view volume's width, far
+    below a pixel), to five significant figures above; NaN and inf kept.
+
+    Far coarser than the grader's tolerances (1e-7 and finer), so that nothing drawn answers
+    a graded function's hidden case.
+    """
+    x = np.asarray(x, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        digits = np.minimum(4.0, 4.0 - np.floor(np.log10(np.abs(x))))
+    digits = np.where(np.isfinite(digits), digits, 4.0)
+    scale = 10.0 ** digits
+    with np.errstate(invalid="ignore", over="ignore"):
+        return np.where(np.isfinite(x), np.round(x * scale) / scale, x)
+
+
 def screen_points(P) -> np.ndarray:
-    """``to_screen`` for drawing: vertices with ``w = 0`` become NaN instead of an error."""
+    """Vertices divided by ``w`` for drawing, at display precision (:func:`display_round`);
+    vertices with ``w = 0`` become NaN instead of an error."""
     P = np.asarray(P, dtype=float).reshape(-1, 4)
     out = np.full((len(P), 3), np.nan)
     ok = P[:, 3] != 0
     out[ok] = P[ok, :3] / P[ok, 3:]
-    return out
+    return display_round(out)
 
 
 def _closed(pts: np.ndarray) -> np.ndarray:
@@ -94,16 +115,16 @@ def plot_view_volume(ax=None, label_axes: bool = True):
     return {"edges": edges, "near": near, "far": far}
 
 
-def plot_clipping_3d(P, ax=None, clipped=None, title: str | None = None):
+def plot_clipping_3d(P, clipped, ax=None, title: str | None = None):
     """A homogeneous polygon and its clipped version, drawn in 3-D screen space (Q6(b)(iii)).
 
     Parameters
     ----------
     P : array_like, shape (n, 4)
         The polygon in homogeneous screen coordinates.
+    clipped : array_like, shape (m, 4)
+        The clipped polygon (homogeneous; e.g. :func:`course_lib.clip_results.exam_A_clipped`).
     ax : Axes3D, optional
-    clipped : array_like, shape (m, 4), optional
-        The clipped polygon; computed with :func:`course_lib.clipping.clip_polygon` if omitted.
     title : str, optional
 
     Returns
@@ -115,8 +136,6 @@ def plot_clipping_3d(P, ax=None, clipped=None, title: str | None = None):
     """
     ax = _ax3d(ax)
     P = np.asarray(P, dtype=float)
-    if clipped is None:
-        clipped = clipping.clip_polygon(P)
     box = plot_view_volume(ax)
     orig = _closed(screen_points(P))
     cl = screen_points(clipped)
@@ -136,18 +155,19 @@ def plot_clipping_3d(P, ax=None, clipped=None, title: str | None = None):
             "clipped_vertices": verts}
 
 
-def plot_clipping_2d(P, ax=None, dims=(0, 1), clipped=None, title: str | None = None):
+def plot_clipping_2d(P, clipped, ax=None, dims=(0, 1), title: str | None = None):
     """A polygon and its clipped version seen along one screen axis (Q6(b)).
 
     Parameters
     ----------
     P : array_like, shape (n, 4)
         Homogeneous polygon.
+    clipped : array_like, shape (m, 4)
+        The clipped polygon (homogeneous).
     ax : matplotlib.axes.Axes, optional
     dims : pair of ints
         The screen axes to draw: ``(0, 1)`` is the screen itself (``x_s, y_s``); ``(1, 2)`` is a
         side view (``y_s, z_s``), the natural view of the exam's edge-on triangles.
-    clipped : array_like, shape (m, 4), optional
     title : str, optional
 
     Returns
@@ -160,8 +180,6 @@ def plot_clipping_2d(P, ax=None, dims=(0, 1), clipped=None, title: str | None = 
     if ax is None:
         _, ax = new_figure()
     P = np.asarray(P, dtype=float)
-    if clipped is None:
-        clipped = clipping.clip_polygon(P)
     i, j = dims
     lo, hi = BOX_MIN[[i, j]], BOX_MAX[[i, j]]
     rect = Rectangle(lo, *(hi - lo), fill=True, facecolor="#f2f2f2",
@@ -193,15 +211,14 @@ def plot_clipping_2d(P, ax=None, dims=(0, 1), clipped=None, title: str | None = 
             "labels": labels}
 
 
-def plot_triangulation(poly_xy, triangles=None, ax=None, title: str | None = None):
+def plot_triangulation(poly_xy, triangles, ax=None, title: str | None = None):
     """A polygon split into triangles: a fan for convex ones, ear clipping otherwise (Q6(c)).
 
     Parameters
     ----------
     poly_xy : array_like, shape (n, 2)
-    triangles : array_like of int, shape (n - 2, 3), optional
-        Defaults to :func:`~course_lib.clipping.fan_triangulate` when the polygon is convex and
-        :func:`~course_lib.clipping.ear_clip` when it is not.
+    triangles : array_like of int, shape (n - 2, 3)
+        Vertex numbers, one row per triangle (e.g. from :mod:`course_lib.clip_results`).
     ax : matplotlib.axes.Axes, optional
     title : str, optional
 
@@ -214,9 +231,6 @@ def plot_triangulation(poly_xy, triangles=None, ax=None, title: str | None = Non
     if ax is None:
         _, ax = new_figure()
     p = np.asarray(poly_xy, dtype=float)
-    if triangles is None:
-        triangles = (clipping.fan_triangulate(len(p)) if clipping.is_convex(p)
-                     else clipping.ear_clip(p))
     triangles = np.asarray(triangles, dtype=int)
     cmap = plt.get_cmap("tab20")
     coll = PolyCollection(p[triangles], facecolors=[cmap(k % 20) for k in range(len(triangles))],
@@ -230,7 +244,7 @@ def plot_triangulation(poly_xy, triangles=None, ax=None, title: str | None = Non
     return {"triangles": coll, "outline": outline, "labels": labels}
 
 
-def plot_polygon_spans(poly_xy, y, ax=None, title: str | None = None):
+def plot_polygon_spans(poly_xy, y, spans, ax=None, title: str | None = None):
     """The spans of a polygon on one scanline: several for a non-convex polygon (Q6(c)).
 
     Parameters
@@ -238,6 +252,8 @@ def plot_polygon_spans(poly_xy, y, ax=None, title: str | None = None):
     poly_xy : array_like, shape (n, 2)
     y : float
         Height of the scanline.
+    spans : array_like, shape (k, 2)
+        The spans ``(x_left, x_right)`` on it (e.g. :func:`course_lib.clip_results.comb`).
     ax : matplotlib.axes.Axes, optional
     title : str, optional
 
@@ -254,7 +270,7 @@ def plot_polygon_spans(poly_xy, y, ax=None, title: str | None = None):
     x0, x1 = p[:, 0].min(), p[:, 0].max()
     pad = 0.1 * (x1 - x0)
     (scan,) = ax.plot([x0 - pad, x1 + pad], [y, y], ls=":", color=COLOURS["control"])
-    spans = clipping.polygon_spans(p, y)
+    spans = np.asarray(spans, dtype=float).reshape(-1, 2)
     segs = [[(a, y), (b, y)] for a, b in spans]
     coll = LineCollection(segs, colors=COLOURS["highlight"], linewidths=4)
     ax.add_collection(coll)

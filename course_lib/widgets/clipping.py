@@ -9,6 +9,11 @@ updated in place and painted by the browser (:mod:`course_lib.widgets._view`): t
 2-D panel's axes stay cached and the 3-D panel's contents are projected and sent again, to be
 drawn over its cached panes and ticks.
 
+The explorer clips with the course's references through one routine, :func:`clip_display`,
+which returns only what is shown: vertices at display precision, the vertex table at three
+decimals and the inside/outside readout as text. The students' wheel compiles a private copy of
+the references into that routine alone (``INLINE_INTO`` in :mod:`autograder.student_bundle`).
+
 In a notebook (any matplotlib backend)::
 
     from course_lib.widgets.clipping import clipping_explorer
@@ -50,6 +55,41 @@ _FACES = np.array([
 _COORDS = ("X", "Y", "Z", "w")
 
 
+def clip_display(P) -> dict:
+    """What the explorer shows of polygon ``P`` (homogeneous, ``(n, 4)``) clipped plane by plane
+    (Q6(b)(iii)), at display precision only.
+
+    Returns a dict: ``"steps"``, the polygon before clipping and after each of the six planes
+    (homogeneous, rounded to the table's three decimals); ``"screen"``, the same divided by
+    ``w`` for drawing (:func:`~course_lib.plots.clipping.display_round`); ``"tables"``, each
+    step's vertex table (HTML, three decimals); ``"inside"``, each input vertex in or out of the
+    view volume as text (``"yes, no, ..."``), and ``"error"`` (``None``, or why ``P`` cannot be
+    clipped, e.g. a vertex ``[0, 0, 0, 0]``: then every step after the input is empty).
+    """
+    P = np.asarray(P, dtype=float)
+    try:
+        steps = clipping.clip_steps(P)
+        inside = ", ".join("yes" if v else "no" for v in clipping.inside_view_volume(P))
+        error = None
+    except ValueError as exc:
+        steps, inside, error = [P] + [np.zeros((0, 4))] * 6, None, str(exc)
+    return {"steps": [np.round(s, 3) for s in steps], "screen": [screen_points(s) for s in steps],
+            "tables": [_vertex_table(s) for s in steps], "inside": inside, "error": error}
+
+
+def _vertex_table(P) -> str:
+    """The vertices of a step as an HTML table: homogeneous and divided, three decimals."""
+    if len(P) == 0:
+        return "<i>no vertices</i>"
+    rows = "".join(
+        f"<tr><td>{k}</td>" + "".join(f"<td>{v:.3f}</td>" for v in p) +
+        "".join(f"<td>{v:.3f}</td>" for v in (p[:3] / p[3] if p[3] else [np.nan] * 3)) +
+        "</tr>" for k, p in enumerate(P))
+    head = "".join(f"<th>{h}</th>" for h in
+                   ("#", "X", "Y", "Z", "w", "x<sub>s</sub>", "y<sub>s</sub>", "z<sub>s</sub>"))
+    return f"<table style='font-family:monospace'><tr>{head}</tr>{rows}</table>"
+
+
 class ClippingExplorer:
     """Step a homogeneous polygon through the six clipping planes and move its vertices.
 
@@ -65,8 +105,9 @@ class ClippingExplorer:
     ----------
     P : ndarray
         The current polygon (changed by the vertex sliders).
-    steps : list of ndarray
-        :func:`course_lib.clipping.clip_steps` of ``P``: ``steps[k]`` after ``k`` planes.
+    shown : dict
+        :func:`clip_display` of ``P``: ``shown["steps"][k]`` is the polygon after ``k`` planes
+        (homogeneous, three decimals), ``shown["screen"][k]`` the same as drawn.
     step, prev_button, next_button, vertex, coord_sliders
         The controls; set their values from Python to drive the explorer.
     art3d, art2d : dict
@@ -80,7 +121,7 @@ class ClippingExplorer:
         if self.P.ndim != 2 or self.P.shape[1] != 4 or len(self.P) < 3:
             raise ValueError(f"P must have shape (n, 4) with n >= 3, got {self.P.shape}")
         self.dims = tuple(dims)
-        self.steps = clipping.clip_steps(self.P)
+        self.shown = clip_display(self.P)
         self.last_update_ms = 0.0
         self._view = FigureView()                  # painted by the browser
         self._syncing = False
@@ -114,7 +155,7 @@ class ClippingExplorer:
         ax3.legend(loc="upper left", fontsize=7)
 
         # 2-D panel: reuse the static figure's artists.
-        self.art2d = plot_clipping_2d(self.P, ax=ax2, dims=self.dims, clipped=self.P)
+        self.art2d = plot_clipping_2d(self.P, self.P, ax=ax2, dims=self.dims)
         for text in self.art2d["labels"]:
             text.remove()
         self.art2d["labels"] = []
@@ -208,15 +249,10 @@ class ClippingExplorer:
         t0 = time.perf_counter()
         k = self.step.value
         if recompute:
-            try:
-                self.steps = clipping.clip_steps(self.P)
-                self.error = None
-            except ValueError as exc:            # e.g. a vertex moved to [0, 0, 0, 0]
-                self.steps = [self.P] + [np.zeros((0, 4))] * 6
-                self.error = str(exc)
-        current = self.steps[k]
+            self.shown = clip_display(self.P)
+        shown = self.shown
         inp = _closed(screen_points(self.P))
-        cur = screen_points(current)
+        cur = shown["screen"][k]
         cur_closed = _closed(cur)
 
         a3 = self.art3d
@@ -241,18 +277,17 @@ class ClippingExplorer:
         a2["clipped_vertices"].set_data(cur[:, i], cur[:, j])
         self._plane_line_2d(k)
 
-        if self.error:
-            title = f"cannot clip: {self.error}"
+        if shown["error"]:
+            title = f"cannot clip: {shown['error']}"
         elif k == 0:
-            title = f"input: {len(current)} vertices, inside = " + \
-                ", ".join("yes" if v else "no" for v in clipping.inside_view_volume(self.P))
+            title = f"input: {len(cur)} vertices, inside = {shown['inside']}"
         else:
             title = (f"after plane {k} of 6, {clipping.PLANE_NAMES[k - 1]}: "
-                     f"{len(current)} vertices" + ("" if len(current) >= 3 else " (nothing left)"))
+                     f"{len(cur)} vertices" + ("" if len(cur) >= 3 else " (nothing left)"))
         self.status.set_text(title)
         self.last_update_ms = 1000 * (time.perf_counter() - t0)
         self._view.redraw(self.fig)
-        self.readout.value = self._table(current)  # the figure's frame first, the table after it
+        self.readout.value = shown["tables"][k]  # the figure's frame first, the table after it
         self.summary.value = title
 
     def _plane_line_2d(self, k):
@@ -266,18 +301,6 @@ class ClippingExplorer:
             line.set_data(face[[0, 2], 0], face[[0, 2], 1])
         else:                                        # the plane faces us: outline it
             line.set_data(*_closed(face).T)
-
-    @staticmethod
-    def _table(P) -> str:
-        if len(P) == 0:
-            return "<i>no vertices</i>"
-        rows = "".join(
-            f"<tr><td>{k}</td>" + "".join(f"<td>{v:.3f}</td>" for v in p) +
-            "".join(f"<td>{v:.3f}</td>" for v in (p[:3] / p[3] if p[3] else [np.nan] * 3)) +
-            "</tr>" for k, p in enumerate(P))
-        head = "".join(f"<th>{h}</th>" for h in
-                       ("#", "X", "Y", "Z", "w", "x<sub>s</sub>", "y<sub>s</sub>", "z<sub>s</sub>"))
-        return f"<table style='font-family:monospace'><tr>{head}</tr>{rows}</table>"
 
     # -- display -------------------------------------------------------------------------------
 

@@ -64,15 +64,16 @@ def _shading():
 
 
 def _clipping():
+    from course_lib import clip_results
     from course_lib import clipping as clip
     from course_lib.plots import clipping as q6
 
     A = np.array(clip.EXAM_Q6["A"])
-    comb = np.array([[0, 0], [5, 0], [5, 3], [4, 3], [4, 1], [3, 1], [3, 3], [2, 3], [2, 1],
-                     [1, 1], [1, 3], [0, 3]], dtype=float)
+    A_clipped, _ = clip_results.exam_A_clipped()
+    comb, y, spans, _ = clip_results.comb()
     yield "view_volume", q6.plot_view_volume
-    yield "clipping_2d", lambda: q6.plot_clipping_2d(A, dims=(1, 2), title="side view")
-    yield "polygon_spans", lambda: q6.plot_polygon_spans(comb, 2.0)
+    yield "clipping_2d", lambda: q6.plot_clipping_2d(A, A_clipped, dims=(1, 2), title="side view")
+    yield "polygon_spans", lambda: q6.plot_polygon_spans(comb, y, spans)
     yield "raster", lambda: q6.plot_raster([[2.3, 1.2], [17.6, 6.1], [6.2, 14.7]], 20, 16)
 
 
