@@ -70,17 +70,14 @@ LEFT_OUT_HELPERS = {
     "course_lib.clipping": ("clip_against_plane", "clip_steps", "clip_polygons", "_clip_array",
                             "_clip_plane_array", "_clip_batch", "_clip_rows"),
 }
-#: shipped routines that compute with left-out functions yet answer no graded question (they
-#: return only display-precision numbers and text): ``{module: (qualname, ...)}``
-INLINE_INTO = {
-    "course_lib.widgets.clipping": ("clip_display",),
-}
 #: shipped routines that compute with left-out functions yet answer no graded question: each
 #: returns only a whole figure, an 8-bit image, text, or numbers at display precision, and
 #: stores nothing finer on an object. The students' copy of each calls C-level copies of the
 #: left-out functions it calls, which nothing else can reach (:mod:`autograder.inlining`);
 #: ``{module: (qualified name, ...)}``, methods as ``Class.method``
-INLINE_INTO: dict[str, tuple[str, ...]] = {}
+INLINE_INTO: dict[str, tuple[str, ...]] = {
+    "course_lib.widgets.clipping": ("clip_display",),                    # q6 clipping explorer
+}
 #: modules the students' wheel does not carry at all (nothing of the students' copy needs
 #: them; no shipped module may import them)
 INSTRUCTORS_ONLY = ("course_lib.mesh", "course_lib._polygons")
