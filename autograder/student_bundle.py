@@ -68,7 +68,7 @@ LEFT_OUT_HELPERS = {
         "_check_volume", "_active_cells", "_march", "_axis_vertices", "marching_cubes_loop",
         "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation"),
     "course_lib.clipping": ("clip_against_plane", "clip_steps", "clip_polygons", "_clip_array",
-                            "_clip_plane_array", "_clip_batch", "_clip_rows"),
+                            "_clip_plane_array", "_clip_batch", "_clip_rows", "shoelace_area"),
 }
 #: shipped routines that compute with left-out functions yet answer no graded question: each
 #: returns only a whole figure, an 8-bit image, text, or numbers at display precision, and

@@ -16,27 +16,10 @@ from __future__ import annotations
 import numpy as np
 
 from ._raster import _cross
+from .clipping import shoelace_area
 from ._validate import as_points, as_scalar
 
 __all__ = ["ear_clip", "is_convex", "polygon_area", "polygon_spans", "shoelace_area"]
-
-
-def shoelace_area(x, y) -> float:
-    """The shoelace sum ``1/2 sum_i (x_i y_{i+1} - x_{i+1} y_i)`` of the closed polygon with
-    vertex coordinates ``x``, ``y`` (1-D float arrays of one length, at least 3; unchecked):
-    positive when anticlockwise.
-
-    The coordinates are shifted to their centroid first: the same sum, with far less
-    cancellation.
-
-    Examples
-    --------
-    >>> shoelace_area(np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0]))
-    0.5
-    """
-    x = x - x.mean()
-    y = y - y.mean()
-    return float(0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
 
 
 def _polygon2(poly_xy, name="poly_xy", min_count=3) -> np.ndarray:

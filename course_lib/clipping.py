@@ -384,9 +384,25 @@ def screen_area(P_screen) -> float:
         raise ValueError(f"P_screen must have shape (n, 3) or (n, 2), got shape {P.shape}")
     if len(P) < 3:
         return 0.0
-    from ._polygons import shoelace_area       # instructors only, as this function
-
     return shoelace_area(P[:, 0], P[:, 1])
+
+
+def shoelace_area(x, y) -> float:
+    """The shoelace sum ``1/2 sum_i (x_i y_{i+1} - x_{i+1} y_i)`` of the closed polygon with
+    vertex coordinates ``x``, ``y`` (1-D float arrays of one length, at least 3; unchecked):
+    positive when anticlockwise.
+
+    The coordinates are shifted to their centroid first: the same sum, with far less
+    cancellation.
+
+    Examples
+    --------
+    >>> shoelace_area(np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0]))
+    0.5
+    """
+    x = x - x.mean()
+    y = y - y.mean()
+    return float(0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
 
 
 def fan_triangulate(m) -> np.ndarray:

@@ -85,7 +85,7 @@ def test_comb_spans_and_ear_clipping():
     triangles covering it, as many as mapbox-earcut's."""
     comb, y, spans, tris = clip_results.comb()
     line = LineString([(-1, y), (6, y)]).intersection(Polygon(comb))
-    np.testing.assert_allclose(sorted(g.bounds[0::2] for g in line.geoms), spans)
+    np.testing.assert_allclose(sorted(g.bounds[0::2] for g in line.geoms), spans, atol=1e-12)
     np.testing.assert_array_equal(spans, [[0, 1], [2, 3], [4, 5]])
     earcut = mapbox_earcut.triangulate_float64(np.array(comb), np.array([len(comb)], dtype=np.uint32))
     _check_triangulation(comb, tris, len(earcut) // 3)
