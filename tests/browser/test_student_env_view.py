@@ -4,7 +4,7 @@
 ``.venv-student``) starts JupyterLab from a virtual environment holding only the students'
 wheel (here the tests' shared one, ``tests/studentenv.py``). In a release notebook a student
 sees nbgrader's Validate button, the kernel imports ``course_lib`` from that environment, and
-``clip_polygon??`` shows the reference's docstring but no source.
+``perspective_matrix??`` (a shipped function of Q6) shows its docstring but no source.
 """
 
 from __future__ import annotations
@@ -48,15 +48,15 @@ def test_student_env_shows_docstring_not_source(page, student_env_lab, artifacts
     page.keyboard.press("Enter")
     first = panel.locator(".jp-Notebook .jp-Cell").first
     page.keyboard.type("import course_lib.clipping as reference\nprint(reference.__file__)\n"
-                       "reference.clip_polygon??")
-    first.get_by_text("reference.clip_polygon??").wait_for(timeout=30_000)
+                       "reference.perspective_matrix??")
+    first.get_by_text("reference.perspective_matrix??").wait_for(timeout=30_000)
     page.keyboard.press("Shift+Enter")
     output = first.locator(".jp-OutputArea")
     try:
-        output.get_by_text("Sutherland-Hodgman").first.wait_for(timeout=180_000)
+        output.get_by_text("from camera coordinates to homogeneous").first.wait_for(timeout=180_000)
     finally:
-        page.screenshot(path=str(artifacts / "student-env-clip-polygon-source.png"))
+        page.screenshot(path=str(artifacts / "student-env-perspective-matrix-source.png"))
     text = output.inner_text()
     site = str(studentenv.site_packages())
     assert site in text and ".so" in text, f"course_lib not from the student env:\n{text[:1000]}"
-    assert "def clip_polygon" not in text and "Source:" not in text, text[:2000]
+    assert "def perspective_matrix" not in text and "Source:" not in text, text[:2000]
