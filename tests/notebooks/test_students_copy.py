@@ -182,3 +182,66 @@ def test_students_q3_figures_are_the_instructors(tmp_path):
         np.testing.assert_allclose(tris, want, rtol=0, atol=0.5e-4, err_msg=str((index, iso, alt)))
     np.testing.assert_allclose(got["explorer"], mc.cell_triangles(case_values(165), 0.31, True),
                                rtol=0, atol=0.5e-4)
+
+
+Q6_IN_STUDENT_ENV = r'''
+import importlib.util, pickle, sys
+import numpy as np
+from course_lib import clipping
+from course_lib._clip_results_data import load
+from course_lib.widgets.clipping import ClippingExplorer, clip_display
+polygons = pickle.load(open(sys.argv[2], "rb"))
+shown = [clip_display(P) for P in polygons]
+ex = ClippingExplorer(polygons[0], dims=(1, 2))
+ex.step.value = 6
+gone = [n for n in ("clip_polygon", "to_screen", "inside_view_volume", "screen_area",
+                    "fan_triangulate", "clip_steps", "clip_polygons", "shoelace_area",
+                    "_clip_rows") if hasattr(clipping, n)]
+with open(sys.argv[1], "wb") as f:
+    pickle.dump({"data": dict(load()), "shown": shown, "status": ex.status.get_text(),
+                 "drawn": ex.art2d["clipped"].get_xy(), "gone": gone,
+                 "polygons": importlib.util.find_spec("course_lib._polygons") is not None}, f)
+'''
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("student_env")
+def test_students_q6_figures_are_the_instructors(tmp_path):
+    """In the students' environment: q6's shipped results are the references' bit for bit, the
+    explorer's display routine (C-level copies of the clipping references) shows what the
+    instructors' shows, number for number and word for word, and the graded functions, the
+    clipping machinery and ``course_lib._polygons`` are absent."""
+    if shutil.which("gcc") is None:
+        pytest.skip("no C compiler (make wheel-deps)")
+    import pickle
+
+    import numpy as np
+    import studentenv
+
+    from course_lib import _clip_results_data, clipping
+    from course_lib.widgets.clipping import clip_display
+
+    rng = np.random.default_rng(6)
+    polygons = [clipping.EXAM_Q6["A"], np.array([[0.0, 0, 0, 0], [1, 0, 0.5, 1], [0, 1, 0.5, 1]])]
+    polygons += [np.c_[rng.uniform(-3, 3, (n, 3)), rng.uniform(-1, 3, (n, 1))] for n in (3, 5, 8)]
+    (tmp_path / "in.pkl").write_bytes(pickle.dumps(polygons))
+    out = tmp_path / "q6.pkl"
+    proc = studentenv.run(Q6_IN_STUDENT_ENV, str(out), str(tmp_path / "in.pkl"), cwd=tmp_path,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    got = pickle.loads(out.read_bytes())
+    assert got["gone"] == [] and got["polygons"] is False
+    ref = _clip_results_data.compute()
+    assert sorted(got["data"]) == sorted(ref)
+    for name, array in ref.items():
+        np.testing.assert_array_equal(got["data"][name], array, err_msg=name)
+    for P, theirs in zip(polygons, got["shown"]):
+        ours = clip_display(P)
+        assert theirs["tables"] == ours["tables"] and theirs["inside"] == ours["inside"]
+        assert (theirs["error"] is None) == (ours["error"] is None)
+        for key in ("steps", "screen"):
+            for a, b in zip(theirs[key], ours[key]):
+                np.testing.assert_array_equal(a, b)
+    assert "after plane 6 of 6, far" in got["status"] and "4 vertices" in got["status"]
+    drawn, want = got["drawn"][:-1], np.array([[0, 0.5], [0.5, 0.5], [0.5, 1], [0.25, 1]])
+    assert any(np.allclose(np.roll(drawn, k, axis=0), want, atol=1e-12) for k in range(4)), drawn
