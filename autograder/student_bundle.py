@@ -58,7 +58,6 @@ STILL_SHIPPED = frozenset({
     "collimator_resolution", "open_fraction", "pmt_gain", "ring_hole_positions",  # q2
     "end_derivatives", "end_rows", "parameter_row", "phantom_point",      # q4 explorer, figures
     "catmull_rom_basis", "bspline_basis",                                 # q4 splines.basis
-    "normalize", "reflect", "halfway", "phong", "blinn_phong",            # q5 Phong explorer
     "clip_polygon", "fan_triangulate", "inside_view_volume", "screen_area", "to_screen",  # q6
 })
 #: helpers the students' wheel leaves out with the graded functions: each computes a left-out
@@ -67,13 +66,22 @@ LEFT_OUT_HELPERS = {
     "course_lib.marching_cubes": (
         "_check_volume", "_active_cells", "_march", "_axis_vertices", "marching_cubes_loop",
         "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation"),
+    "course_lib.shading": ("_unit", "_shade", "phong_terms", "highlight_normal", "highlight_pixel", "render_sphere", "sphere_normals", "view_basis"),
+    "course_lib.spectral": ("spectral_phong", "render_sphere_spectral"),
+}
+#: shipped routines that compute with left-out functions yet answer no graded question (they
+#: return a whole figure, an 8-bit image, text or numbers at display precision):
+#: ``{module: (qualname, ...)}``, methods as ``Class.method``
+INLINE_INTO = {
+    "course_lib.plots.shading": ("update_sphere_pair", "drawn_vectors"),
+    "course_lib.widgets.shading": ("PhongExplorer.refresh", "angles"),
 }
 #: modules the students' wheel does not carry at all (nothing of the students' copy needs
 #: them; no shipped module may import them)
 INSTRUCTORS_ONLY = ("course_lib.mesh",)
 #: modules whose students' copy is generated when the wheel is built: the text their
 #: ``students_copy()`` returns (e.g. the results of the references on a figure's fixed inputs)
-GENERATED_MODULES = ("course_lib._mc_results_data",)
+GENERATED_MODULES = ("course_lib._mc_results_data", "course_lib._spectral_spheres_data")
 #: the instructors' requirements a student's environment needs (versions come from our own
 #: package metadata, so the two never disagree)
 STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "anywidget", "jupyterlab",
@@ -184,8 +192,9 @@ def left_out() -> dict[str, tuple[str, ...]]:
     :func:`withheld_functions` and their :data:`LEFT_OUT_HELPERS`."""
     out = {m: set(names) for m, names in withheld_functions().items()}
     for m, names in LEFT_OUT_HELPERS.items():
-        if m in out:          # the helpers go with the module's graded functions
-            out[m].update(names)
+        # the helpers go with the graded functions they compute, even from another module
+        # (course_lib.spectral's per-wavelength Phong model goes with course_lib.shading's)
+        out.setdefault(m, set()).update(names)
     return {m: tuple(sorted(names)) for m, names in sorted(out.items())}
 
 

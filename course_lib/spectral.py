@@ -30,6 +30,7 @@ __all__ = [
     "CIE_1931_2DEG",
     "LAMBDA_MAX",
     "LAMBDA_MIN",
+    "SPECTRAL_SPHERES",
     "XYZ_TO_LINEAR_SRGB",
     "XYZ_to_Lab",
     "XYZ_to_linear_srgb",
@@ -148,6 +149,15 @@ XYZ_TO_LINEAR_SRGB = np.array([
     [-0.9689, 1.8758, 0.0415],
     [0.0557, -0.2040, 1.0570],
 ])
+
+#: The fixed inputs of the notebook's spectral spheres (Q5(d), going further;
+#: :func:`course_lib.plots.shading.plot_spectral_spheres`): a green dye (a Gaussian band,
+#: ``(centre, fwhm, peak, floor)`` of :func:`gaussian_band`) under :func:`triband_fluorescent`,
+#: rendered by :func:`render_sphere_spectral` with ``Ia = Ip = 1`` by the RGB model, by each
+#: ``ns`` wavelength samples (point sampling) and converged.
+SPECTRAL_SPHERES = {"dye": (525.0, 25.0, 0.9, 0.05), "ka": 0.2, "kd": 0.7, "ks": 0.5,
+                    "n": 30.0, "L": (1.0, -1.0, 1.0), "V": (0.0, -1.0, 0.2), "ns": (9, 16),
+                    "size": 128}
 
 #: Spacing of the dense grid used for the converged integrals (nm).
 DENSE_STEP = 0.1
