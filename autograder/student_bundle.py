@@ -66,8 +66,8 @@ LEFT_OUT_HELPERS = {
     "course_lib.marching_cubes": (
         "_check_volume", "_active_cells", "_march", "_axis_vertices", "marching_cubes_loop",
         "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation"),
-    "course_lib.shading": ("_unit", "_shade", "phong_terms", "highlight_normal", "highlight_pixel", "render_sphere", "sphere_normals", "view_basis"),
-    "course_lib.spectral": ("spectral_phong", "render_sphere_spectral"),
+    "course_lib.shading": ("_unit", "_shade", "phong_terms", "highlight_normal", "highlight_pixel",
+                           "render_sphere", "sphere_normals", "view_basis"),
 }
 #: shipped routines that compute with left-out functions yet answer no graded question (they
 #: return a whole figure, an 8-bit image, text or numbers at display precision):
@@ -78,7 +78,7 @@ INLINE_INTO = {
 }
 #: modules the students' wheel does not carry at all (nothing of the students' copy needs
 #: them; no shipped module may import them)
-INSTRUCTORS_ONLY = ("course_lib.mesh",)
+INSTRUCTORS_ONLY = ("course_lib.mesh", "course_lib.spectral_render")
 #: modules whose students' copy is generated when the wheel is built: the text their
 #: ``students_copy()`` returns (e.g. the results of the references on a figure's fixed inputs)
 GENERATED_MODULES = ("course_lib._mc_results_data", "course_lib._spectral_spheres_data")
@@ -192,9 +192,8 @@ def left_out() -> dict[str, tuple[str, ...]]:
     :func:`withheld_functions` and their :data:`LEFT_OUT_HELPERS`."""
     out = {m: set(names) for m, names in withheld_functions().items()}
     for m, names in LEFT_OUT_HELPERS.items():
-        # the helpers go with the graded functions they compute, even from another module
-        # (course_lib.spectral's per-wavelength Phong model goes with course_lib.shading's)
-        out.setdefault(m, set()).update(names)
+        if m in out:          # the helpers go with the module's graded functions
+            out[m].update(names)
     return {m: tuple(sorted(names)) for m, names in sorted(out.items())}
 
 

@@ -1,8 +1,9 @@
 """The images of Q5(d)'s spectral spheres, rendered by the course's spectral Phong model.
 
 :func:`course_lib.plots.shading.plot_spectral_spheres` draws these. In the instructors' copy
-they are rendered here, on first use, by :func:`course_lib.spectral.render_sphere_spectral`
-(which computes with the Phong model's reference, :mod:`course_lib.shading`). The students'
+they are rendered here, on first use, by
+:func:`course_lib.spectral_render.render_sphere_spectral` (which computes with the Phong model's
+reference, :mod:`course_lib.shading`). The students'
 wheel holds neither (docs/students-copy.md): when it is built, this module is replaced by the
 text :func:`students_copy` returns, the same :func:`load` over the same pixels written out as a
 literal, so the students' figure is the instructors' one, pixel for pixel. Every input is fixed
@@ -28,6 +29,7 @@ def compute() -> dict:
     """``{"images": (4, size, size, 3) uint8}``: RGB model, each ``ns``, converged, rendered now
     by the reference (the instructors' copy only)."""
     from . import spectral
+    from .spectral_render import render_sphere_spectral
 
     spec = spectral.SPECTRAL_SPHERES
 
@@ -36,9 +38,9 @@ def compute() -> dict:
 
     args = (spectral.triband_fluorescent, dye, 1.0, spec["ka"], 1.0, spec["kd"], spec["ks"],
             spec["n"], spec["L"], spec["V"], spec["size"])
-    linear = [spectral.render_sphere_spectral(*args, rgb_model=True)]
-    linear += [spectral.render_sphere_spectral(*args, n_samples=k) for k in spec["ns"]]
-    linear.append(spectral.render_sphere_spectral(*args))
+    linear = [render_sphere_spectral(*args, rgb_model=True)]
+    linear += [render_sphere_spectral(*args, n_samples=k) for k in spec["ns"]]
+    linear.append(render_sphere_spectral(*args))
     return {"images": np.stack([to_pixels(spectral.linear_srgb_to_srgb(im)) for im in linear])}
 
 

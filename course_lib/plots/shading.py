@@ -144,7 +144,7 @@ def sphere_pair(colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128, axes=None,
         _, axes = new_figure(2, size=3.6)
     axes = list(np.ravel(axes))
     art = {"images": [], "peaks": [], "analytic": [], "titles": [], "axes": list(axes)}
-    for ax, _model, name in zip(axes, ("phong", "blinn"), ("Phong  (R·V)ⁿ", "Blinn-Phong  (N·H)ⁿ")):
+    for ax, name in zip(axes, ("Phong  (R·V)ⁿ", "Blinn-Phong  (N·H)ⁿ")):
         im = ax.imshow(np.zeros((size, size, 3)), interpolation="nearest",
                        extent=(-0.5, size - 0.5, size - 0.5, -0.5))
         peak, = ax.plot([], [], "o", mfc="none", mec=COLOURS["highlight"], ms=12, mew=1.8,
@@ -356,7 +356,7 @@ def plot_spectral_spheres(axes=None):
     """A green-dyed sphere under the tri-phosphor fluorescent lamp by the three-sample RGB
     model, by 9 and 16 wavelength samples, and converged (Q5(d), going further).
 
-    The four images are those :func:`course_lib.spectral.render_sphere_spectral` makes from
+    The four images are those :func:`course_lib.spectral_render.render_sphere_spectral` makes from
     :data:`course_lib.spectral.SPECTRAL_SPHERES` (``Ia = Ip = 1``), as the 8-bit sRGB pixels
     drawn; they are computed when the course library is built
     (:mod:`course_lib._spectral_spheres_data`), so the figure costs no spectral integration.

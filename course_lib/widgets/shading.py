@@ -108,7 +108,7 @@ class PhongExplorer(FigureExplorer):
     peaks : list
         The two rendered highlight pixels ``(row, col)`` (or ``None``) after the last update.
     probe_values : dict
-        ``{"phong": (3,) array, "blinn": (3,) array}`` at the probe, to the 4 decimals the
+        ``{"Phong": (3,) array, "Blinn-Phong": (3,) array}`` at the probe, to the 4 decimals the
         readout shows, or ``None`` values when the probe is on the hidden side of the sphere.
     halfway_shown : ndarray or None
         The half-way vector to the readout's 3 decimals (``None`` when ``V = -L``).
@@ -142,7 +142,7 @@ class PhongExplorer(FigureExplorer):
                                             "blue surface, Ia ka = Ip kd = 0.5, Ip ks = 1")
         self.readout = W.HTML()
         self.peaks = [None, None]
-        self.probe_values = {"phong": None, "blinn": None}
+        self.probe_values = {"Phong": None, "Blinn-Phong": None}
         self.halfway_shown = None
         self._holding = False
         self._exam_mode = False
@@ -218,22 +218,24 @@ class PhongExplorer(FigureExplorer):
                       [round((1 - y) * self.size / 2 - 0.5, 2)])
         for m in self.probe_markers:
             m.set_data(*marker)
-        phong = blinn = halfway = None
+        at_probe = {"Phong": None, "Blinn-Phong": None}
+        h_shown = None
         if visible:
             try:
-                phong = np.round(shading.phong(*args[:7], L, self.probe, V), 4)
+                at_probe["Phong"] = np.round(shading.phong(*args[:7], L, self.probe, V), 4)
             except ValueError:
                 pass
             try:
-                blinn = np.round(shading.blinn_phong(*args[:7], L, self.probe, V), 4)
+                at_probe["Blinn-Phong"] = np.round(
+                    shading.blinn_phong(*args[:7], L, self.probe, V), 4)
             except ValueError:  # V = -L: no half-way vector
                 pass
         try:
-            halfway = np.round(shading.halfway(L, V), 3)
+            h_shown = np.round(shading.halfway(L, V), 3)
         except ValueError:
             pass
-        self.probe_values = {"phong": phong, "blinn": blinn}
-        self.halfway_shown = halfway
+        self.probe_values = at_probe
+        self.halfway_shown = h_shown
         self.readout.value = self._readout_html(L, V)
         set_summary(self.fig, self._summary())
 
@@ -253,8 +255,8 @@ class PhongExplorer(FigureExplorer):
                 f"{num(self.light_elevation.value)} degrees, seen from azimuth "
                 f"{num(self.view_azimuth.value)}, elevation {num(self.view_elevation.value)}. "
                 f"Phong (left): {where(self.peaks[0])}, probe intensity "
-                f"{rgb(self.probe_values['phong'])}. Blinn-Phong (right): "
-                f"{where(self.peaks[1])}, probe intensity {rgb(self.probe_values['blinn'])}.")
+                f"{rgb(self.probe_values['Phong'])}. Blinn-Phong (right): "
+                f"{where(self.peaks[1])}, probe intensity {rgb(self.probe_values['Blinn-Phong'])}.")
 
     def _readout_html(self, L, V) -> str:
         def vec(v):
@@ -268,8 +270,8 @@ class PhongExplorer(FigureExplorer):
             f"L = {vec(L)}", f"V = {vec(V)}"
             f"{' (the exam&#39;s exact directions)' if self._exam_mode else ''}", f"H = {H}",
             f"probe N = {vec(self.probe)} (yellow square)",
-            f"<b>Phong</b> I = {rgb(self.probe_values['phong'])}",
-            f"<b>Blinn-Phong</b> I = {rgb(self.probe_values['blinn'])}")
+            f"<b>Phong</b> I = {rgb(self.probe_values['Phong'])}",
+            f"<b>Blinn-Phong</b> I = {rgb(self.probe_values['Blinn-Phong'])}")
 
     def load_exam(self, *_):
         """Set the controls to the Q5(b) example (one update at the end).

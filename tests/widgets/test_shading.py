@@ -58,7 +58,7 @@ def test_exam_button_shows_the_printed_answer(explorer):
     explorer.exam_button.click()
     np.testing.assert_allclose(explorer.L, np.array([1.0, -1.0, 1.0]) / SQ3, atol=1e-12)
     np.testing.assert_allclose(explorer.V, [0.0, 1.0, 0.0], atol=1e-12)
-    np.testing.assert_allclose(explorer.probe_values["phong"], [0.0931, 0.0931, 0.699],
+    np.testing.assert_allclose(explorer.probe_values["Phong"], [0.0931, 0.0931, 0.699],
                                atol=5e-4)
     html = explorer.readout.value
     assert "0.0931" in html and "0.6988" in html
@@ -66,7 +66,7 @@ def test_exam_button_shows_the_printed_answer(explorer):
     # kept to the readout's 4 decimals
     explorer.light_elevation.value = 35.5
     exact = 0.5 + 0.25 * (1 - 1 / SQ3) + (0.5 + 0.5 / SQ3) ** 10
-    np.testing.assert_allclose(explorer.probe_values["phong"][2], exact, rtol=0,
+    np.testing.assert_allclose(explorer.probe_values["Phong"][2], exact, rtol=0,
                                atol=0.5e-4 + 1e-12)
     for values in explorer.probe_values.values():
         np.testing.assert_array_equal(values, np.round(values, 4))
@@ -168,7 +168,7 @@ def test_probe_readout_is_the_model_at_the_digits_shown(explorer):
     H = (L + V) / np.linalg.norm(L + V)
     assert L @ N > 0 and N @ V > 0
     body = c * (0.25 + 0.55 * (L @ N))
-    for key, cosine in (("phong", R @ V), ("blinn", N @ H)):
+    for key, cosine in (("Phong", R @ V), ("Blinn-Phong", N @ H)):
         want = body + 0.9 * max(cosine, 0.0) ** 12.0
         got = explorer.probe_values[key]
         np.testing.assert_allclose(got, want, rtol=0, atol=0.5e-4 + 1e-12)
