@@ -70,19 +70,15 @@ LEFT_OUT_HELPERS = {
     "course_lib.shading": ("_unit", "_shade", "phong_terms", "highlight_normal", "highlight_pixel",
                            "render_sphere", "sphere_normals", "view_basis"),
 }
-#: shipped routines that compute with left-out functions yet answer no graded question (they
-#: return a whole figure, an 8-bit image, text or numbers at display precision):
-#: ``{module: (qualname, ...)}``, methods as ``Class.method``
-INLINE_INTO = {
-    "course_lib.plots.shading": ("update_sphere_pair", "drawn_vectors"),
-    "course_lib.widgets.shading": ("PhongExplorer.refresh", "angles"),
-}
 #: shipped routines that compute with left-out functions yet answer no graded question: each
 #: returns only a whole figure, an 8-bit image, text, or numbers at display precision, and
 #: stores nothing finer on an object. The students' copy of each calls C-level copies of the
 #: left-out functions it calls, which nothing else can reach (:mod:`autograder.inlining`);
 #: ``{module: (qualified name, ...)}``, methods as ``Class.method``
-INLINE_INTO: dict[str, tuple[str, ...]] = {}
+INLINE_INTO: dict[str, tuple[str, ...]] = {
+    "course_lib.plots.shading": ("update_sphere_pair", "drawn_vectors"),          # q5 figures
+    "course_lib.widgets.shading": ("PhongExplorer.refresh", "angles"),            # q5 explorer
+}
 #: modules the students' wheel does not carry at all (nothing of the students' copy needs
 #: them; no shipped module may import them)
 INSTRUCTORS_ONLY = ("course_lib.mesh", "course_lib.spectral_render")

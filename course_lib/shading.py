@@ -197,11 +197,11 @@ def _coefficients(colour, Ia, ka, Ip, kd, ks, n):
     return colour, coef
 
 
-def phong_terms(L, N, V, n, model: str = "phong"):
+def phong_terms(L, N, V, n, model: str = "Phong"):
     """The geometric factors of the model: ``(max(L.N, 0), specular)``.
 
-    ``specular`` is ``max(R.V, 0)^n`` (``model="phong"``) or ``max(N.H, 0)^n``
-    (``model="blinn"``), set to 0 wherever ``L.N <= 0``. ``L``, ``N``, ``V`` are normalised
+    ``specular`` is ``max(R.V, 0)^n`` (``model="Phong"``) or ``max(N.H, 0)^n``
+    (``model="Blinn-Phong"``), set to 0 wherever ``L.N <= 0``. ``L``, ``N``, ``V`` are normalised
     here; the two returned arrays have the broadcast leading shape of the three.
 
     Notes
@@ -221,10 +221,10 @@ def phong_terms(L, N, V, n, model: str = "phong"):
         raise ValueError("N contains a zero-length vector, which has no direction")
     LN = _dot(L, N) / m
     NV = _dot(N, V) / m
-    if model == "phong":
+    if model == "Phong":
         # R.V = (2 (L.N) N - L).V = 2 (L.N)(N.V) - L.V
         c = 2.0 * LN * NV - _dot(L, V)
-    elif model == "blinn":
+    elif model == "Blinn-Phong":
         # N.H = N.(L + V) / |L + V|
         norm = _length(L + V)
         if np.any(norm < 1e-12):
@@ -232,7 +232,7 @@ def phong_terms(L, N, V, n, model: str = "phong"):
                              "is undefined")
         c = (LN + NV) / norm
     else:
-        raise ValueError(f"model must be 'phong' or 'blinn', got {model!r}")
+        raise ValueError(f"model must be 'Phong' or 'Blinn-Phong', got {model!r}")
     lit = LN > 0
     spec = np.where(lit, np.maximum(c, 0.0), 0.0) ** n
     spec = np.where(lit, spec, 0.0)
@@ -293,7 +293,7 @@ def phong(colour, Ia, ka, Ip, kd, ks, n, L, N, V) -> np.ndarray:
     ...       (0, 0.5, 3 ** 0.5 / 2), (0, 1, 0)).round(4)
     array([0.0931, 0.0931, 0.6988])
     """
-    return _shade(colour, Ia, ka, Ip, kd, ks, n, L, N, V, "phong")
+    return _shade(colour, Ia, ka, Ip, kd, ks, n, L, N, V, "Phong")
 
 
 def blinn_phong(colour, Ia, ka, Ip, kd, ks, n, L, N, V) -> np.ndarray:
@@ -314,7 +314,7 @@ def blinn_phong(colour, Ia, ka, Ip, kd, ks, n, L, N, V) -> np.ndarray:
     exponent the Blinn-Phong highlight is wider: the angle between ``N`` and ``H`` is about half
     the angle between ``R`` and ``V``.
     """
-    return _shade(colour, Ia, ka, Ip, kd, ks, n, L, N, V, "blinn")
+    return _shade(colour, Ia, ka, Ip, kd, ks, n, L, N, V, "Blinn-Phong")
 
 
 # --------------------------------------------------------------------------------------------
@@ -382,7 +382,7 @@ def sphere_normals(V, size: int = 128, up=(0.0, 0.0, 1.0)):
     return normals, mask
 
 
-def render_sphere(colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128, model: str = "phong",
+def render_sphere(colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128, model: str = "Phong",
                   up=(0.0, 0.0, 1.0), background=0.0):
     """Shade a unit sphere pixel by pixel, seen orthographically from direction ``V``.
 
@@ -394,7 +394,7 @@ def render_sphere(colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128, model: s
         Directions towards the (directional) light and the (distant) viewer.
     size : int
         The image is ``size x size`` pixels; the sphere fills it.
-    model : {"phong", "blinn"}
+    model : {"Phong", "Blinn-Phong"}
     up : array_like, shape (3,)
         World direction shown upwards on screen (see :func:`view_basis`).
     background : float

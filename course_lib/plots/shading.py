@@ -179,7 +179,7 @@ def update_sphere_pair(art, colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128
         analytic = np.round(shading.highlight_pixel(L, V, size, up), 2)
     except ValueError:  # L = -V: no half-way vector, no highlight
         pass
-    for k, model in enumerate(("phong", "blinn")):
+    for k, model in enumerate(("Phong", "Blinn-Phong")):
         try:
             img, peak = shading.render_sphere(colour, Ia, ka, Ip, kd, ks, n, L, V, size,
                                               model=model, up=up)

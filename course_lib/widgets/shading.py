@@ -220,14 +220,16 @@ class PhongExplorer(FigureExplorer):
             m.set_data(*marker)
         at_probe = {"Phong": None, "Blinn-Phong": None}
         h_shown = None
+        c, Ia, ka, Ip, kd, ks, n = args[:7]
         if visible:
             try:
-                at_probe["Phong"] = np.round(shading.phong(*args[:7], L, self.probe, V), 4)
+                at_probe["Phong"] = np.round(
+                    shading.phong(c, Ia, ka, Ip, kd, ks, n, L, self.probe, V), 4)
             except ValueError:
                 pass
             try:
                 at_probe["Blinn-Phong"] = np.round(
-                    shading.blinn_phong(*args[:7], L, self.probe, V), 4)
+                    shading.blinn_phong(c, Ia, ka, Ip, kd, ks, n, L, self.probe, V), 4)
             except ValueError:  # V = -L: no half-way vector
                 pass
         try:

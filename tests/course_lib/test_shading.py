@@ -296,7 +296,7 @@ def _random_light_viewer(rng):
             return L, V
 
 
-@pytest.mark.parametrize("model", ["phong", "blinn"])
+@pytest.mark.parametrize("model", ["Phong", "Blinn-Phong"])
 def test_sphere_highlight_at_analytic_position(model):
     """Both peaks sit where N = H: R = V there (Phong) and N.H = 1 (Blinn). The rendered
     argmax must be within a pixel and a half of the projection of H."""
@@ -326,8 +326,8 @@ def test_sphere_phong_highlight_tighter_than_blinn_same_exponent():
     """Viewer and light 90 degrees apart: near the peak R.V ~ cos 2t against N.H ~ cos t, so
     fewer pixels exceed half the peak under Phong (about a quarter of Blinn's area)."""
     args = ((1, 1, 1), 0, 0, 1, 0, 1, 40, (1, 0, 1), (0, 0, 1))
-    p, _ = sh.render_sphere(*args, size=128, model="phong")
-    b, _ = sh.render_sphere(*args, size=128, model="blinn")
+    p, _ = sh.render_sphere(*args, size=128, model="Phong")
+    b, _ = sh.render_sphere(*args, size=128, model="Blinn-Phong")
     area_p, area_b = np.sum(p[..., 0] > 0.5), np.sum(b[..., 0] > 0.5)
     assert 0 < area_p < area_b
     assert 0.15 < area_p / area_b < 0.45
