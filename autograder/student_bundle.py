@@ -67,8 +67,8 @@ LEFT_OUT_HELPERS = {
     "course_lib.marching_cubes": (
         "_check_volume", "_active_cells", "_march", "_axis_vertices", "marching_cubes_loop",
         "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation"),
-    "course_lib.shading": ("_unit", "_shade", "phong_terms", "highlight_normal", "highlight_pixel",
-                           "render_sphere", "sphere_normals", "view_basis"),
+    "course_lib.shading": ("_normalised", "_unit", "_shade", "phong_terms", "highlight_normal",
+                           "highlight_pixel", "render_sphere", "sphere_normals", "view_basis"),
 }
 #: shipped routines that compute with left-out functions yet answer no graded question: each
 #: returns only a whole figure, an 8-bit image, text, or numbers at display precision, and

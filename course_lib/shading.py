@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import as_float_array, as_int, as_scalar, as_vectors, unit
+from ._validate import as_float_array, as_int, as_scalar, as_vectors
 
 __all__ = [
     "EXAM_Q5B",
@@ -66,6 +66,15 @@ def _length(v: np.ndarray) -> np.ndarray:
     return np.sqrt(np.einsum("...i,...i->...", v, v))
 
 
+def _normalised(v: np.ndarray, name: str) -> np.ndarray:
+    """``v`` normalised along its last axis (``np.linalg.norm``); ``ValueError`` for a
+    zero-length vector. (It computes :func:`normalize`'s answer, so it goes where that goes.)"""
+    norm = np.linalg.norm(v, axis=-1, keepdims=True)
+    if np.any(norm == 0):
+        raise ValueError(f"{name} contains a zero-length vector, which has no direction")
+    return v / norm
+
+
 def _unit(v: np.ndarray, name: str) -> np.ndarray:
     """``v`` normalised along its last axis; ``ValueError`` for a zero-length vector."""
     m = _length(v)
@@ -106,7 +115,7 @@ def normalize(v) -> np.ndarray:
     arr = as_float_array(v, "v")
     if arr.ndim == 0 or arr.shape[-1] == 0:
         raise ValueError(f"v must have shape (..., d) with d >= 1, got shape {arr.shape}")
-    return unit(arr, "v")
+    return _normalised(arr, "v")
 
 
 def reflect(L, N) -> np.ndarray:
@@ -142,7 +151,7 @@ def reflect(L, N) -> np.ndarray:
     array([-1.,  1.,  0.])
     """
     L = as_vectors(L, 3, "L")
-    N = unit(as_vectors(N, 3, "N"), "N")
+    N = _normalised(as_vectors(N, 3, "N"), "N")
     return 2.0 * _dot(L, N)[..., None] * N - L
 
 
@@ -170,8 +179,8 @@ def halfway(L, V) -> np.ndarray:
     mirror direction ``R`` points at the viewer. With the light and the viewer at infinity
     ``H`` is the same for every surface point.
     """
-    L = unit(as_vectors(L, 3, "L"), "L")
-    V = unit(as_vectors(V, 3, "V"), "V")
+    L = _normalised(as_vectors(L, 3, "L"), "L")
+    V = _normalised(as_vectors(V, 3, "V"), "V")
     s = L + V
     if np.any(np.linalg.norm(s, axis=-1) < 1e-12):
         raise ValueError("L and V point in opposite directions: the half-way vector is undefined")
@@ -342,10 +351,10 @@ def view_basis(V, up=(0.0, 0.0, 1.0)):
     ``y`` axis is used instead when ``up`` is parallel to ``V``). Returns a ``(3, 3)`` array of
     rows.
     """
-    V = unit(as_vectors(V, 3, "V"), "V")
+    V = _normalised(as_vectors(V, 3, "V"), "V")
     if V.shape != (3,):
         raise ValueError(f"V must be a single vector of shape (3,), got shape {V.shape}")
-    u = unit(as_vectors(up, 3, "up"), "up")
+    u = _normalised(as_vectors(up, 3, "up"), "up")
     e_up = u - (u @ V) * V
     if np.linalg.norm(e_up) < 1e-9:
         alt = np.array([0.0, 1.0, 0.0]) if abs(V[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
@@ -418,11 +427,11 @@ def render_sphere(colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128, model: s
     colour, k = _coefficients(colour, Ia, ka, Ip, kd, ks, n)
     if colour.shape != (3,):
         raise ValueError(f"colour must be one RGB triple of shape (3,), got shape {colour.shape}")
-    L = unit(as_vectors(L, 3, "L"), "L")
+    L = _normalised(as_vectors(L, 3, "L"), "L")
     if L.shape != (3,):
         raise ValueError(f"L must be a single vector of shape (3,), got shape {L.shape}")
     normals, mask = sphere_normals(V, size, up)
-    V = unit(as_vectors(V, 3, "V"), "V")
+    V = _normalised(as_vectors(V, 3, "V"), "V")
     Nv = normals[mask]
     diffuse, spec = phong_terms(L, Nv, V, k["n"], model)
     image = np.full(normals.shape, float(background))
