@@ -15,7 +15,10 @@ and no specular term where the light is behind the surface (``L.N <= 0``). Blinn
 
 Besides the five graded functions this module renders a unit sphere pixel by pixel under either
 model (orthographic view, directional light) and locates the highlight analytically, for the
-notebook's figures and the Phong explorer.
+notebook's figures and the Phong explorer. The students' copy holds none of the five, nor the
+helpers that compute their answers (``autograder.student_bundle.LEFT_OUT_HELPERS``): its figures
+and explorer draw through routines that keep only 8-bit images and readouts at the digits
+shown (``INLINE_INTO``; docs/students-copy.md).
 """
 
 from __future__ import annotations
