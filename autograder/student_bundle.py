@@ -54,19 +54,21 @@ SHIPPED_AS_SOURCE = ("course_lib.answers", "course_lib.variants")
 #: explorer, a figure or a release notebook's cell computes with them; every other graded
 #: function's reference is left out of the wheel (:func:`withheld_functions`).
 #: docs/students-copy.md gives the plan that empties this set.
-STILL_SHIPPED = frozenset({
-    "displayed_thickness",                                               # q1 B-scan explorer
-    "collimator_resolution", "open_fraction", "pmt_gain", "ring_hole_positions",  # q2
-    "end_derivatives", "end_rows", "parameter_row", "phantom_point",      # q4 explorer, figures
-    "catmull_rom_basis", "bspline_basis",                                 # q4 splines.basis
-    "normalize", "reflect", "halfway", "phong", "blinn_phong",            # q5 Phong explorer
-})
+STILL_SHIPPED: frozenset[str] = frozenset()
 #: helpers the students' wheel leaves out with the graded functions: each computes a left-out
 #: function's answer (or part of it) or calls one; ``{module: (function, ...)}``
 LEFT_OUT_HELPERS = {
-    "course_lib.marching_cubes": (
+    "course_lib.marching_cubes": (                                                   # q3
         "_check_volume", "_active_cells", "_march", "_axis_vertices", "marching_cubes_loop",
-        "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation"),
+        "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation",
+        "cube_symmetries", "_apply", "_orbit_labels", "_cycle_lengths"),   # Q3(b)'s orbits
+    "course_lib.ultrasound": ("phantom_interfaces", "displayed_faces"),  # q1: displayed depths
+    "course_lib.gamma_camera": ("pmt_cascade", "exam_cutoff_radius", "exact_cutoff_radius",  # q2
+                                "transmission_profile", "compare_models"),
+    "course_lib.splines": ("basis_matrix", "end_weights", "_apply_rule", "extend_with_phantoms",
+                           "segment_geometries", "evaluate_curve"),                  # q4
+    "course_lib.shading": ("_normalised", "_unit", "_shade", "phong_terms", "highlight_normal",
+                           "highlight_pixel", "render_sphere", "sphere_normals", "view_basis"),
     "course_lib.clipping": ("clip_against_plane", "clip_steps", "clip_polygons", "_clip_array",
                             "_clip_plane_array", "_clip_batch", "_clip_rows", "shoelace_area"),
 }
@@ -76,14 +78,28 @@ LEFT_OUT_HELPERS = {
 #: left-out functions it calls, which nothing else can reach (:mod:`autograder.inlining`);
 #: ``{module: (qualified name, ...)}``, methods as ``Class.method``
 INLINE_INTO: dict[str, tuple[str, ...]] = {
-    "course_lib.widgets.clipping": ("clip_display",),                    # q6 clipping explorer
+    "course_lib.plots.ultrasound": ("bscan_summary", "displayed_outlines", "displayed_interfaces"),
+    "course_lib.widgets.ultrasound": ("BScanExplorer._write_readout",),   # q1 readout, text
+    "course_lib.plots.gamma_camera": ("cascade_labels", "shown_resolution", "hole_verdicts",
+                                      "profile_curves", "model_curves"),      # q2 figures
+    "course_lib.widgets.gamma_camera": ("collimator_model",),                # q2 explorer
+    "course_lib.plots.splines": ("spline_scene", "plot_blending_functions"),   # q4 figures
+    "course_lib.plots.shading": ("update_sphere_pair", "drawn_vectors"),      # q5 figures
+    "course_lib.widgets.shading": ("PhongExplorer.refresh", "angles"),        # q5 explorer
+    "course_lib.widgets.clipping": ("clip_display",),                        # q6 explorer
 }
 #: modules the students' wheel does not carry at all (nothing of the students' copy needs
 #: them; no shipped module may import them)
-INSTRUCTORS_ONLY = ("course_lib.mesh", "course_lib._polygons")
+INSTRUCTORS_ONLY = ("course_lib.mesh", "course_lib._polygons", "course_lib.spectral_render")
 #: modules whose students' copy is generated when the wheel is built: the text their
 #: ``students_copy()`` returns (e.g. the results of the references on a figure's fixed inputs)
-GENERATED_MODULES = ("course_lib._mc_results_data", "course_lib._clip_results_data")
+GENERATED_MODULES = (
+    "course_lib._mc_results_data", "course_lib._mc_tables", "course_lib._mc_case_data",  # q3
+    "course_lib._collimator_results_data",                                          # q2
+    "course_lib._spline_weights_data",                                              # q4
+    "course_lib._spectral_spheres_data",                                            # q5
+    "course_lib._clip_results_data",                                                # q6
+)
 #: the instructors' requirements a student's environment needs (versions come from our own
 #: package metadata, so the two never disagree)
 STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "anywidget", "jupyterlab",

@@ -70,11 +70,3 @@ def as_int(x, name: str, minimum: int | None = None) -> int:
     if minimum is not None and value < minimum:
         raise ValueError(f"{name} must be at least {minimum}, got {value}")
     return value
-
-
-def unit(v: np.ndarray, name: str) -> np.ndarray:
-    """Normalise ``v`` along its last axis; ``ValueError`` for a zero-length vector."""
-    norm = np.linalg.norm(v, axis=-1, keepdims=True)
-    if np.any(norm == 0):
-        raise ValueError(f"{name} contains a zero-length vector, which has no direction")
-    return v / norm

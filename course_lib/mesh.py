@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import as_points, as_vectors, unit
+from ._validate import as_points, as_vectors
+from .shading import _normalised as unit
 
 __all__ = [
     "boundary_edges",

@@ -15,14 +15,17 @@ and no specular term where the light is behind the surface (``L.N <= 0``). Blinn
 
 Besides the five graded functions this module renders a unit sphere pixel by pixel under either
 model (orthographic view, directional light) and locates the highlight analytically, for the
-notebook's figures and the Phong explorer.
+notebook's figures and the Phong explorer. The students' copy holds none of the five, nor the
+helpers that compute their answers (``autograder.student_bundle.LEFT_OUT_HELPERS``): its figures
+and explorer draw through routines that keep only 8-bit images and readouts at the digits
+shown (``INLINE_INTO``; docs/students-copy.md).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ._validate import as_float_array, as_int, as_scalar, as_vectors, unit
+from ._validate import as_float_array, as_int, as_scalar, as_vectors
 
 __all__ = [
     "EXAM_Q5B",
@@ -66,6 +69,15 @@ def _length(v: np.ndarray) -> np.ndarray:
     return np.sqrt(np.einsum("...i,...i->...", v, v))
 
 
+def _normalised(v: np.ndarray, name: str) -> np.ndarray:
+    """``v`` normalised along its last axis (``np.linalg.norm``); ``ValueError`` for a
+    zero-length vector. (It computes :func:`normalize`'s answer, so it goes where that goes.)"""
+    norm = np.linalg.norm(v, axis=-1, keepdims=True)
+    if np.any(norm == 0):
+        raise ValueError(f"{name} contains a zero-length vector, which has no direction")
+    return v / norm
+
+
 def _unit(v: np.ndarray, name: str) -> np.ndarray:
     """``v`` normalised along its last axis; ``ValueError`` for a zero-length vector."""
     m = _length(v)
@@ -106,7 +118,7 @@ def normalize(v) -> np.ndarray:
     arr = as_float_array(v, "v")
     if arr.ndim == 0 or arr.shape[-1] == 0:
         raise ValueError(f"v must have shape (..., d) with d >= 1, got shape {arr.shape}")
-    return unit(arr, "v")
+    return _normalised(arr, "v")
 
 
 def reflect(L, N) -> np.ndarray:
@@ -142,7 +154,7 @@ def reflect(L, N) -> np.ndarray:
     array([-1.,  1.,  0.])
     """
     L = as_vectors(L, 3, "L")
-    N = unit(as_vectors(N, 3, "N"), "N")
+    N = _normalised(as_vectors(N, 3, "N"), "N")
     return 2.0 * _dot(L, N)[..., None] * N - L
 
 
@@ -170,8 +182,8 @@ def halfway(L, V) -> np.ndarray:
     mirror direction ``R`` points at the viewer. With the light and the viewer at infinity
     ``H`` is the same for every surface point.
     """
-    L = unit(as_vectors(L, 3, "L"), "L")
-    V = unit(as_vectors(V, 3, "V"), "V")
+    L = _normalised(as_vectors(L, 3, "L"), "L")
+    V = _normalised(as_vectors(V, 3, "V"), "V")
     s = L + V
     if np.any(np.linalg.norm(s, axis=-1) < 1e-12):
         raise ValueError("L and V point in opposite directions: the half-way vector is undefined")
@@ -197,11 +209,11 @@ def _coefficients(colour, Ia, ka, Ip, kd, ks, n):
     return colour, coef
 
 
-def phong_terms(L, N, V, n, model: str = "phong"):
+def phong_terms(L, N, V, n, model: str = "Phong"):
     """The geometric factors of the model: ``(max(L.N, 0), specular)``.
 
-    ``specular`` is ``max(R.V, 0)^n`` (``model="phong"``) or ``max(N.H, 0)^n``
-    (``model="blinn"``), set to 0 wherever ``L.N <= 0``. ``L``, ``N``, ``V`` are normalised
+    ``specular`` is ``max(R.V, 0)^n`` (``model="Phong"``) or ``max(N.H, 0)^n``
+    (``model="Blinn-Phong"``), set to 0 wherever ``L.N <= 0``. ``L``, ``N``, ``V`` are normalised
     here; the two returned arrays have the broadcast leading shape of the three.
 
     Notes
@@ -221,10 +233,10 @@ def phong_terms(L, N, V, n, model: str = "phong"):
         raise ValueError("N contains a zero-length vector, which has no direction")
     LN = _dot(L, N) / m
     NV = _dot(N, V) / m
-    if model == "phong":
+    if model == "Phong":
         # R.V = (2 (L.N) N - L).V = 2 (L.N)(N.V) - L.V
         c = 2.0 * LN * NV - _dot(L, V)
-    elif model == "blinn":
+    elif model == "Blinn-Phong":
         # N.H = N.(L + V) / |L + V|
         norm = _length(L + V)
         if np.any(norm < 1e-12):
@@ -232,7 +244,7 @@ def phong_terms(L, N, V, n, model: str = "phong"):
                              "is undefined")
         c = (LN + NV) / norm
     else:
-        raise ValueError(f"model must be 'phong' or 'blinn', got {model!r}")
+        raise ValueError(f"model must be 'Phong' or 'Blinn-Phong', got {model!r}")
     lit = LN > 0
     spec = np.where(lit, np.maximum(c, 0.0), 0.0) ** n
     spec = np.where(lit, spec, 0.0)
@@ -293,7 +305,7 @@ def phong(colour, Ia, ka, Ip, kd, ks, n, L, N, V) -> np.ndarray:
     ...       (0, 0.5, 3 ** 0.5 / 2), (0, 1, 0)).round(4)
     array([0.0931, 0.0931, 0.6988])
     """
-    return _shade(colour, Ia, ka, Ip, kd, ks, n, L, N, V, "phong")
+    return _shade(colour, Ia, ka, Ip, kd, ks, n, L, N, V, "Phong")
 
 
 def blinn_phong(colour, Ia, ka, Ip, kd, ks, n, L, N, V) -> np.ndarray:
@@ -314,7 +326,7 @@ def blinn_phong(colour, Ia, ka, Ip, kd, ks, n, L, N, V) -> np.ndarray:
     exponent the Blinn-Phong highlight is wider: the angle between ``N`` and ``H`` is about half
     the angle between ``R`` and ``V``.
     """
-    return _shade(colour, Ia, ka, Ip, kd, ks, n, L, N, V, "blinn")
+    return _shade(colour, Ia, ka, Ip, kd, ks, n, L, N, V, "Blinn-Phong")
 
 
 # --------------------------------------------------------------------------------------------
@@ -342,10 +354,10 @@ def view_basis(V, up=(0.0, 0.0, 1.0)):
     ``y`` axis is used instead when ``up`` is parallel to ``V``). Returns a ``(3, 3)`` array of
     rows.
     """
-    V = unit(as_vectors(V, 3, "V"), "V")
+    V = _normalised(as_vectors(V, 3, "V"), "V")
     if V.shape != (3,):
         raise ValueError(f"V must be a single vector of shape (3,), got shape {V.shape}")
-    u = unit(as_vectors(up, 3, "up"), "up")
+    u = _normalised(as_vectors(up, 3, "up"), "up")
     e_up = u - (u @ V) * V
     if np.linalg.norm(e_up) < 1e-9:
         alt = np.array([0.0, 1.0, 0.0]) if abs(V[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
@@ -382,7 +394,7 @@ def sphere_normals(V, size: int = 128, up=(0.0, 0.0, 1.0)):
     return normals, mask
 
 
-def render_sphere(colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128, model: str = "phong",
+def render_sphere(colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128, model: str = "Phong",
                   up=(0.0, 0.0, 1.0), background=0.0):
     """Shade a unit sphere pixel by pixel, seen orthographically from direction ``V``.
 
@@ -394,7 +406,7 @@ def render_sphere(colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128, model: s
         Directions towards the (directional) light and the (distant) viewer.
     size : int
         The image is ``size x size`` pixels; the sphere fills it.
-    model : {"phong", "blinn"}
+    model : {"Phong", "Blinn-Phong"}
     up : array_like, shape (3,)
         World direction shown upwards on screen (see :func:`view_basis`).
     background : float
@@ -418,11 +430,11 @@ def render_sphere(colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128, model: s
     colour, k = _coefficients(colour, Ia, ka, Ip, kd, ks, n)
     if colour.shape != (3,):
         raise ValueError(f"colour must be one RGB triple of shape (3,), got shape {colour.shape}")
-    L = unit(as_vectors(L, 3, "L"), "L")
+    L = _normalised(as_vectors(L, 3, "L"), "L")
     if L.shape != (3,):
         raise ValueError(f"L must be a single vector of shape (3,), got shape {L.shape}")
     normals, mask = sphere_normals(V, size, up)
-    V = unit(as_vectors(V, 3, "V"), "V")
+    V = _normalised(as_vectors(V, 3, "V"), "V")
     Nv = normals[mask]
     diffuse, spec = phong_terms(L, Nv, V, k["n"], model)
     image = np.full(normals.shape, float(background))

@@ -11,8 +11,9 @@ reducing the result to RGB only at the end (Q5(d)) removes most of the error.
 
 This module holds the CIE 1931 2-degree colour-matching functions (the published 5 nm table,
 380-780 nm), XYZ to linear sRGB, CIELAB and the CIE 1976 colour difference, a few analytic
-spectra, the per-wavelength Phong model and the comparison of the three treatments of colour
-(three RGB samples, ``n`` wavelength samples, the converged integral).
+spectra and the comparison of the three treatments of colour (three RGB samples, ``n``
+wavelength samples, the converged integral). The per-wavelength Phong model and the spectrally
+shaded sphere are in :mod:`course_lib.spectral_render` (the instructors' copy only).
 
 Conventions: wavelengths in nm; spectra are callables ``f(wavelengths) -> values`` or arrays
 sampled at given wavelengths; XYZ are scaled so that the equal-energy spectrum ``S = 1`` has
@@ -23,13 +24,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import shading
 from ._validate import as_float_array, as_int, as_positive, as_scalar
 
 __all__ = [
     "CIE_1931_2DEG",
     "LAMBDA_MAX",
     "LAMBDA_MIN",
+    "SPECTRAL_SPHERES",
     "XYZ_TO_LINEAR_SRGB",
     "XYZ_to_Lab",
     "XYZ_to_linear_srgb",
@@ -47,7 +48,6 @@ __all__ = [
     "reflected_colour",
     "rgb_model_colour",
     "sample_wavelengths",
-    "spectral_phong",
     "spectrum_to_XYZ",
     "trapezoid_weights",
     "triband_fluorescent",
@@ -148,6 +148,15 @@ XYZ_TO_LINEAR_SRGB = np.array([
     [-0.9689, 1.8758, 0.0415],
     [0.0557, -0.2040, 1.0570],
 ])
+
+#: The fixed inputs of the notebook's spectral spheres (Q5(d), going further;
+#: :func:`course_lib.plots.shading.plot_spectral_spheres`): a green dye (a Gaussian band,
+#: ``(centre, fwhm, peak, floor)`` of :func:`gaussian_band`) under :func:`triband_fluorescent`,
+#: rendered by :func:`course_lib.spectral_render.render_sphere_spectral` with ``Ia = Ip = 1``
+#: by the RGB model, by each ``ns`` wavelength samples (point sampling) and converged.
+SPECTRAL_SPHERES = {"dye": (525.0, 25.0, 0.9, 0.05), "ka": 0.2, "kd": 0.7, "ks": 0.5,
+                    "n": 30.0, "L": (1.0, -1.0, 1.0), "V": (0.0, -1.0, 0.2), "ns": (9, 16),
+                    "size": 128}
 
 #: Spacing of the dense grid used for the converged integrals (nm).
 DENSE_STEP = 0.1
@@ -360,46 +369,6 @@ def triband_fluorescent(wavelengths, line_fwhm: float = 3.0) -> np.ndarray:
 # the model per wavelength and the three treatments of colour
 
 
-def spectral_phong(reflectance, light, Ia, ka, Ip, kd, ks, n, L, N, V) -> np.ndarray:
-    """The Phong model evaluated at every wavelength sample.
-
-    .. math:: I(\\lambda) = E(\\lambda)\\left[\\rho(\\lambda)(I_a k_a + I_p k_d
-              \\max(\\mathbf L\\cdot\\mathbf N, 0)) + I_p k_s\\max(\\mathbf R\\cdot\\mathbf V,0)^n
-              \\right]
-
-    Parameters
-    ----------
-    reflectance : array_like, shape (..., m)
-        The surface's spectral reflectance ``rho`` (the spectral ``c_lambda``) at ``m``
-        wavelengths.
-    light : array_like, shape (m,)
-        The light's relative spectrum ``E`` (ambient and point light alike).
-    Ia, ka, Ip, kd, ks, n, L, N, V
-        As :func:`course_lib.shading.phong`; the geometry's leading shape broadcasts with
-        ``reflectance``'s.
-
-    Returns
-    -------
-    ndarray, shape (..., m)
-        Reflected spectrum; reduce it with :func:`spectrum_to_XYZ`.
-
-    Notes
-    -----
-    Q5(d): the improvement the examiners describe — run the model once per sampled wavelength
-    (n samples of each spectrum) and only then reduce the result to RGB.
-    The specular term reflects the light's own spectrum (a white highlight under white light).
-    """
-    rho = as_float_array(reflectance, "reflectance")
-    E = as_float_array(light, "light")
-    if E.ndim != 1 or rho.ndim == 0 or rho.shape[-1] != E.size:
-        raise ValueError(f"light must have shape (m,) and reflectance (..., m); got "
-                         f"{E.shape} and {rho.shape}")
-    _, k = shading._coefficients(0.0, Ia, ka, Ip, kd, ks, n)
-    diffuse, spec = shading.phong_terms(L, N, V, k["n"])
-    body = (k["Ia"] * k["ka"] + k["Ip"] * k["kd"] * diffuse)[..., None]
-    return E * (rho * body + (k["Ip"] * k["ks"] * spec)[..., None])
-
-
 def _check_spectrum(f, name):
     if not callable(f):
         raise ValueError(  # noqa: TRY004 - the course's rule: every bad input is a ValueError
@@ -538,43 +507,3 @@ def colour_aliasing(light, reflectance, ns=(9, 16, 81), method: str = "point"):
     XYZ, whites = np.array(XYZ), np.array(whites)
     lab = XYZ_to_Lab(XYZ, whites)
     return XYZ_to_linear_srgb(XYZ), delta_E(lab, lab[-1])
-
-
-
-
-def render_sphere_spectral(light, reflectance, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128,
-                           n_samples: int | None = None, method: str = "point",
-                           rgb_model: bool = False):
-    """A unit sphere shaded by the per-wavelength Phong model, as a linear sRGB image.
-
-    With one light spectrum and one material the per-wavelength model separates: at every pixel
-    ``I(lambda) = body * E(lambda) rho(lambda) + spec * E(lambda)`` with the scalar geometry
-    factors ``body = Ia ka + Ip kd max(L.N, 0)`` and ``spec = Ip ks max(R.V, 0)^n``, so the
-    image is ``body * XYZ(E rho) + spec * XYZ(E)``: two tristimulus vectors, worked out once by
-    :func:`reflected_XYZ` (``n_samples`` wavelengths, or converged for ``None``).
-
-    With ``rgb_model=True`` the diffuse colour is instead the three-sample product
-    :func:`rgb_model_colour` (the Phong model as the exam states it, with the light's colour).
-
-    Returns
-    -------
-    image : ndarray, shape (size, size, 3)
-        Linear sRGB (unclipped); 0 off the sphere.
-
-    Notes
-    -----
-    Q5(d): the same geometry rendered both ways shows where three samples go wrong (only the
-    diffuse body colour differs; the highlight has the light's colour in both).
-    """
-    normals, mask = shading.sphere_normals(V, size)
-    diffuse, spec = shading.phong_terms(L, normals[mask], V, n)
-    _, k = shading._coefficients(0.0, Ia, ka, Ip, kd, ks, n)
-    body = k["Ia"] * k["ka"] + k["Ip"] * k["kd"] * diffuse
-    white = XYZ_to_linear_srgb(reflected_XYZ(light, equal_energy, n_samples, method))
-    if rgb_model:
-        surface = rgb_model_colour(light, reflectance)
-    else:
-        surface = XYZ_to_linear_srgb(reflected_XYZ(light, reflectance, n_samples, method))
-    image = np.zeros(normals.shape)
-    image[mask] = body[:, None] * surface + (k["Ip"] * k["ks"] * spec)[:, None] * white
-    return image

@@ -19,6 +19,7 @@ __all__ = [
     "plot_aliasing_swatches",
     "plot_reflection_vectors",
     "plot_spectra",
+    "drawn_vectors",
     "plot_spectral_spheres",
     "sphere_pair",
     "update_sphere_pair",
@@ -61,12 +62,8 @@ def plot_reflection_vectors(incidence_deg: float = 40.0, view_deg: float = -15.0
     """
     if ax is None:
         _, ax = new_figure(size=4.5)
-    t, p = np.radians(incidence_deg), np.radians(view_deg)
-    N = np.array([0.0, 1.0, 0.0])
-    L = np.array([-np.sin(t), np.cos(t), 0.0])
-    V = np.array([-np.sin(p), np.cos(p), 0.0])
-    R = shading.reflect(L, N)
-    H = shading.halfway(L, V)
+    drawn = drawn_vectors(incidence_deg, view_deg)
+    L, N, R, V, H = (drawn[k] for k in "LNRVH")
     art = {"surface": ax.plot([-1.2, 1.2], [0, 0], color="k", lw=2)[0]}
     ax.fill_between([-1.2, 1.2], [0, 0], [-0.15, -0.15], color="0.85", zorder=0)
     for name, v in (("N", N), ("L", L), ("R", R), ("V", V), ("H", H)):
@@ -92,6 +89,25 @@ def plot_reflection_vectors(incidence_deg: float = 40.0, view_deg: float = -15.0
     ax.set_ylim(-0.2, 1.3)
     ax.set_axis_off()
     return art
+
+
+def drawn_vectors(incidence_deg: float, view_deg: float) -> dict:
+    """The arrows of :func:`plot_reflection_vectors` as drawn: ``{"L", "N", "R", "V", "H"}``,
+    unit vectors in the plane of incidence (``N`` straight up), rounded to 1e-4 (display
+    precision: the axes span 2.6).
+
+    Notes
+    -----
+    Q5(a) and Q5(c): ``R = 2 (L.N) N - L`` and ``H = (L + V) / |L + V|``.
+    """
+    t, p = np.radians(incidence_deg), np.radians(view_deg)
+    N = np.array([0.0, 1.0, 0.0])
+    L = np.array([-np.sin(t), np.cos(t), 0.0])
+    V = np.array([-np.sin(p), np.cos(p), 0.0])
+    R = shading.reflect(L, N)
+    H = shading.halfway(L, V)
+    return {"L": np.round(L, 4), "N": N, "R": np.round(R, 4), "V": np.round(V, 4),
+            "H": np.round(H, 4)}
 
 
 _VEC_MEANING = {"L": "towards the light", "R": "the mirror reflection of L",
@@ -128,7 +144,7 @@ def sphere_pair(colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128, axes=None,
         _, axes = new_figure(2, size=3.6)
     axes = list(np.ravel(axes))
     art = {"images": [], "peaks": [], "analytic": [], "titles": [], "axes": list(axes)}
-    for ax, _model, name in zip(axes, ("phong", "blinn"), ("Phong  (R·V)ⁿ", "Blinn-Phong  (N·H)ⁿ")):
+    for ax, name in zip(axes, ("Phong  (R·V)ⁿ", "Blinn-Phong  (N·H)ⁿ")):
         im = ax.imshow(np.zeros((size, size, 3)), interpolation="nearest",
                        extent=(-0.5, size - 0.5, size - 0.5, -0.5))
         peak, = ax.plot([], [], "o", mfc="none", mec=COLOURS["highlight"], ms=12, mew=1.8,
@@ -152,21 +168,24 @@ def update_sphere_pair(art, colour, Ia, ka, Ip, kd, ks, n, L, V, size: int = 128
                        up=(0.0, 0.0, 1.0)):
     """Re-render both spheres into the artists of :func:`sphere_pair` (``set_data``).
 
-    Returns the two highlight pixels ``(row, col)`` (or ``None``) as rendered.
+    Returns the two highlight pixels ``(row, col)`` (or ``None``) as rendered. The images are
+    8-bit RGB (the intensities clipped to [0, 1], then ``int(255 x)``, the bytes matplotlib
+    would draw from the float image) and the analytic crosses are placed to 0.01 pixel:
+    nothing here keeps an intensity or a direction at more than display precision.
     """
     peaks = []
     analytic = None
     try:
-        analytic = shading.highlight_pixel(L, V, size, up)
+        analytic = np.round(shading.highlight_pixel(L, V, size, up), 2)
     except ValueError:  # L = -V: no half-way vector, no highlight
         pass
-    for k, model in enumerate(("phong", "blinn")):
+    for k, model in enumerate(("Phong", "Blinn-Phong")):
         try:
             img, peak = shading.render_sphere(colour, Ia, ka, Ip, kd, ks, n, L, V, size,
                                               model=model, up=up)
         except ValueError:
             img, peak = np.zeros((size, size, 3)), None
-        art["images"][k].set_data(np.clip(img, 0.0, 1.0))
+        art["images"][k].set_data((np.clip(img, 0.0, 1.0) * 255).astype(np.uint8))
         if peak is None:
             art["peaks"][k].set_data([], [])
         else:
@@ -333,29 +352,30 @@ def plot_aliasing_convergence(cases=ALIASING_CASES, ns=None, ax=None):
     return art
 
 
-def plot_spectral_spheres(light, reflectance, ka=0.2, kd=0.7, ks=0.5, n=30.0,
-                          L=(1.0, -1.0, 1.0), V=(0.0, -1.0, 0.2), ns=(9,), size=128, axes=None,
-                          titles=None):
-    """The same sphere by the three-sample RGB model, by ``n`` wavelength samples, and
-    converged (Q5(d), going further); ``Ia = Ip = 1``.
+def plot_spectral_spheres(axes=None):
+    """A green-dyed sphere under the tri-phosphor fluorescent lamp by the three-sample RGB
+    model, by 9 and 16 wavelength samples, and converged (Q5(d), going further).
+
+    The four images are those :func:`course_lib.spectral_render.render_sphere_spectral` makes from
+    :data:`course_lib.spectral.SPECTRAL_SPHERES` (``Ia = Ip = 1``), as the 8-bit sRGB pixels
+    drawn; they are computed when the course library is built
+    (:mod:`course_lib._spectral_spheres_data`), so the figure costs no spectral integration.
 
     Returns
     -------
     dict with ``"images"`` (AxesImage per panel) and ``"axes"``.
     """
-    panels = 2 + len(ns)
+    from .._spectral_spheres_data import load
+
+    images = load()["images"]
     if axes is None:
-        _, axes = new_figure(panels, size=2.8)
+        _, axes = new_figure(len(images), size=2.8)
     axes = list(np.ravel(axes))
-    args = (light, reflectance, 1.0, ka, 1.0, kd, ks, n, L, V, size)
-    imgs = [spectral.render_sphere_spectral(*args, rgb_model=True)]
-    imgs += [spectral.render_sphere_spectral(*args, n_samples=k) for k in ns]
-    imgs.append(spectral.render_sphere_spectral(*args))
-    names = titles or (["3 samples (RGB)"] + [f"{k} wavelengths" for k in ns] + ["converged"])
+    ns = spectral.SPECTRAL_SPHERES["ns"]
+    names = ["3 samples (RGB)"] + [f"{k} wavelengths" for k in ns] + ["converged"]
     art = {"images": [], "axes": axes}
-    for ax, img, name in zip(axes, imgs, names):
-        art["images"].append(ax.imshow(spectral.linear_srgb_to_srgb(img),
-                                       interpolation="nearest"))
+    for ax, img, name in zip(axes, images, names):
+        art["images"].append(ax.imshow(img, interpolation="nearest"))
         ax.set_title(name, fontsize=10)
         ax.set_xticks([])
         ax.set_yticks([])

@@ -47,9 +47,11 @@ def direction(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
 
 
 def angles(v) -> tuple[float, float]:
-    """``(azimuth, elevation)`` in degrees of the direction ``v`` (inverse of :func:`direction`)."""
+    """``(azimuth, elevation)`` in degrees of the direction ``v`` (inverse of :func:`direction`),
+    to 0.01 degree (the sliders' step is 0.5)."""
     v = shading.normalize(v)
-    return float(np.degrees(np.arctan2(v[1], v[0]))), float(np.degrees(np.arcsin(v[2])))
+    return (round(float(np.degrees(np.arctan2(v[1], v[0]))), 2),
+            round(float(np.degrees(np.arcsin(v[2]))), 2))
 
 
 def hex_to_rgb(text: str) -> np.ndarray:
@@ -67,6 +69,10 @@ def rgb_to_hex(rgb) -> str:
     r = np.clip(np.round(np.asarray(rgb, dtype=float) * 255), 0, 255).astype(int)
     return "#{:02x}{:02x}{:02x}".format(*r)
 
+
+#: The exam's directions of Q5(b) as unit vectors (fixed inputs: the explorer's "exact" mode).
+_EXAM_UNIT = {k: np.asarray(shading.EXAM_Q5B[k], dtype=float)
+              / np.linalg.norm(shading.EXAM_Q5B[k]) for k in ("L", "N", "V")}
 
 #: The worked example of Q5(b) in the explorer's controls.
 _EXAM_L = angles(shading.EXAM_Q5B["L"])
@@ -86,7 +92,8 @@ class PhongExplorer(FigureExplorer):
     size : int
         Pixels per side of each rendering.
     probe : array_like, shape (3,)
-        A surface normal whose intensity is printed (the exam's ``N`` by default).
+        A surface normal whose intensity is printed (the exam's ``N`` by default; another is
+        kept to the precision of its :func:`angles`).
 
     Attributes
     ----------
@@ -101,13 +108,15 @@ class PhongExplorer(FigureExplorer):
     peaks : list
         The two rendered highlight pixels ``(row, col)`` (or ``None``) after the last update.
     probe_values : dict
-        ``{"phong": (3,) array, "blinn": (3,) array}`` at the probe, or ``None`` values when the
-        probe is on the hidden side of the sphere.
+        ``{"Phong": (3,) array, "Blinn-Phong": (3,) array}`` at the probe, to the 4 decimals the
+        readout shows, or ``None`` values when the probe is on the hidden side of the sphere.
+    halfway_shown : ndarray or None
+        The half-way vector to the readout's 3 decimals (``None`` when ``V = -L``).
     """
 
     def __init__(self, size: int = 128, probe=None):
         self.size = int(size)
-        self.probe = shading.normalize(shading.EXAM_Q5B["N"] if probe is None else probe)
+        self.probe = _EXAM_UNIT["N"] if probe is None else direction(*angles(probe))
         slider = {"continuous_update": True, "style": {"description_width": "130px"},
                   "layout": W.Layout(width="350px")}
         self.ka = W.FloatSlider(0.2, min=0.0, max=1.0, step=0.01, description="ka (ambient)",
@@ -133,7 +142,8 @@ class PhongExplorer(FigureExplorer):
                                             "blue surface, Ia ka = Ip kd = 0.5, Ip ks = 1")
         self.readout = W.HTML()
         self.peaks = [None, None]
-        self.probe_values = {"phong": None, "blinn": None}
+        self.probe_values = {"Phong": None, "Blinn-Phong": None}
+        self.halfway_shown = None
         self._holding = False
         self._exam_mode = False
 
@@ -171,14 +181,14 @@ class PhongExplorer(FigureExplorer):
     def L(self) -> np.ndarray:
         """Unit vector towards the light (the exam's exactly, after "Exam Q5(b)")."""
         if self._exam_mode:
-            return shading.normalize(shading.EXAM_Q5B["L"])
+            return _EXAM_UNIT["L"]
         return direction(self.light_azimuth.value, self.light_elevation.value)
 
     @property
     def V(self) -> np.ndarray:
         """Unit vector towards the viewer (the exam's exactly, after "Exam Q5(b)")."""
         if self._exam_mode:
-            return shading.normalize(shading.EXAM_Q5B["V"])
+            return _EXAM_UNIT["V"]
         return direction(self.view_azimuth.value, self.view_elevation.value)
 
     def _args(self):
@@ -194,25 +204,40 @@ class PhongExplorer(FigureExplorer):
 
     def refresh(self):
         """The per-update compute: two renders into the images (``set_data``), the markers and
-        the readout; no drawing."""
+        the readout; no drawing. What it keeps (``probe_values``, ``halfway_shown``, the
+        marker's place to 0.01 pixel) is at the precision shown."""
         args = self._args()
         self.peaks = update_sphere_pair(self.art, *args, size=self.size)
         L, V = self.L, self.V
-        basis = shading.view_basis(V)
         visible = float(self.probe @ V) > 0
+        marker = ([], [])
         if visible:
+            basis = shading.view_basis(V)
             x, y = self.probe @ basis[0], self.probe @ basis[1]
-            col, row = (x + 1) * self.size / 2 - 0.5, (1 - y) * self.size / 2 - 0.5
-            for m in self.probe_markers:
-                m.set_data([col], [row])
-        else:
-            for m in self.probe_markers:
-                m.set_data([], [])
-        for key, model in (("phong", shading.phong), ("blinn", shading.blinn_phong)):
+            marker = ([round((x + 1) * self.size / 2 - 0.5, 2)],
+                      [round((1 - y) * self.size / 2 - 0.5, 2)])
+        for m in self.probe_markers:
+            m.set_data(*marker)
+        at_probe = {"Phong": None, "Blinn-Phong": None}
+        h_shown = None
+        c, Ia, ka, Ip, kd, ks, n = args[:7]
+        if visible:
             try:
-                self.probe_values[key] = model(*args[:7], L, self.probe, V) if visible else None
+                at_probe["Phong"] = np.round(
+                    shading.phong(c, Ia, ka, Ip, kd, ks, n, L, self.probe, V), 4)
             except ValueError:
-                self.probe_values[key] = None
+                pass
+            try:
+                at_probe["Blinn-Phong"] = np.round(
+                    shading.blinn_phong(c, Ia, ka, Ip, kd, ks, n, L, self.probe, V), 4)
+            except ValueError:  # V = -L: no half-way vector
+                pass
+        try:
+            h_shown = np.round(shading.halfway(L, V), 3)
+        except ValueError:
+            pass
+        self.probe_values = at_probe
+        self.halfway_shown = h_shown
         self.readout.value = self._readout_html(L, V)
         set_summary(self.fig, self._summary())
 
@@ -232,8 +257,8 @@ class PhongExplorer(FigureExplorer):
                 f"{num(self.light_elevation.value)} degrees, seen from azimuth "
                 f"{num(self.view_azimuth.value)}, elevation {num(self.view_elevation.value)}. "
                 f"Phong (left): {where(self.peaks[0])}, probe intensity "
-                f"{rgb(self.probe_values['phong'])}. Blinn-Phong (right): "
-                f"{where(self.peaks[1])}, probe intensity {rgb(self.probe_values['blinn'])}.")
+                f"{rgb(self.probe_values['Phong'])}. Blinn-Phong (right): "
+                f"{where(self.peaks[1])}, probe intensity {rgb(self.probe_values['Blinn-Phong'])}.")
 
     def _readout_html(self, L, V) -> str:
         def vec(v):
@@ -242,16 +267,13 @@ class PhongExplorer(FigureExplorer):
         def rgb(v):
             return "—  (probe hidden)" if v is None else "(" + ", ".join(f"{x:.4f}" for x in v) + ")"
 
-        try:
-            H = vec(shading.halfway(L, V))
-        except ValueError:
-            H = "undefined (V = −L)"
+        H = "undefined (V = −L)" if self.halfway_shown is None else vec(self.halfway_shown)
         return readout_html(
             f"L = {vec(L)}", f"V = {vec(V)}"
             f"{' (the exam&#39;s exact directions)' if self._exam_mode else ''}", f"H = {H}",
             f"probe N = {vec(self.probe)} (yellow square)",
-            f"<b>Phong</b> I = {rgb(self.probe_values['phong'])}",
-            f"<b>Blinn-Phong</b> I = {rgb(self.probe_values['blinn'])}")
+            f"<b>Phong</b> I = {rgb(self.probe_values['Phong'])}",
+            f"<b>Blinn-Phong</b> I = {rgb(self.probe_values['Blinn-Phong'])}")
 
     def load_exam(self, *_):
         """Set the controls to the Q5(b) example (one update at the end).

@@ -296,7 +296,7 @@ def _random_light_viewer(rng):
             return L, V
 
 
-@pytest.mark.parametrize("model", ["phong", "blinn"])
+@pytest.mark.parametrize("model", ["Phong", "Blinn-Phong"])
 def test_sphere_highlight_at_analytic_position(model):
     """Both peaks sit where N = H: R = V there (Phong) and N.H = 1 (Blinn). The rendered
     argmax must be within a pixel and a half of the projection of H."""
@@ -326,8 +326,8 @@ def test_sphere_phong_highlight_tighter_than_blinn_same_exponent():
     """Viewer and light 90 degrees apart: near the peak R.V ~ cos 2t against N.H ~ cos t, so
     fewer pixels exceed half the peak under Phong (about a quarter of Blinn's area)."""
     args = ((1, 1, 1), 0, 0, 1, 0, 1, 40, (1, 0, 1), (0, 0, 1))
-    p, _ = sh.render_sphere(*args, size=128, model="phong")
-    b, _ = sh.render_sphere(*args, size=128, model="blinn")
+    p, _ = sh.render_sphere(*args, size=128, model="Phong")
+    b, _ = sh.render_sphere(*args, size=128, model="Blinn-Phong")
     area_p, area_b = np.sum(p[..., 0] > 0.5), np.sum(b[..., 0] > 0.5)
     assert 0 < area_p < area_b
     assert 0.15 < area_p / area_b < 0.45
@@ -364,8 +364,9 @@ def test_figures_draw_what_the_maths_says():
     from course_lib.plots import shading as ps
 
     art = ps.plot_reflection_vectors(incidence_deg=30.0, view_deg=-10.0)
-    # the R arrow ends at the mirror image of L: (sin 30, cos 30)
-    np.testing.assert_allclose(art["R"][0].xy, (np.sin(np.radians(30)), np.cos(np.radians(30))), atol=1e-12)
+    # the R arrow ends at the mirror image of L: (sin 30, cos 30), drawn to 1e-4
+    np.testing.assert_allclose(art["R"][0].xy, (np.sin(np.radians(30)), np.cos(np.radians(30))),
+                               rtol=0, atol=0.5e-4 + 1e-12)
     plt.close("all")
 
     L, V = (1.0, -1.0, 1.0), (0.0, -1.0, 0.2)
@@ -373,10 +374,13 @@ def test_figures_draw_what_the_maths_says():
     Lu, Vu = np.array(L) / np.sqrt(3), np.array(V) / np.linalg.norm(V)
     H = (Lu + Vu) / np.linalg.norm(Lu + Vu)
     B = sh.view_basis(V)
-    for k in (0, 1):
-        assert art["analytic"][k].get_xdata()[0] == pytest.approx((H @ B[0] + 1) * 32 - 0.5)
-        assert art["analytic"][k].get_ydata()[0] == pytest.approx((1 - H @ B[1]) * 32 - 0.5)
+    for k in (0, 1):    # the cross to 0.01 pixel, the image 8-bit
+        assert art["analytic"][k].get_xdata()[0] == pytest.approx((H @ B[0] + 1) * 32 - 0.5,
+                                                                  abs=0.005 + 1e-9)
+        assert art["analytic"][k].get_ydata()[0] == pytest.approx((1 - H @ B[1]) * 32 - 0.5,
+                                                                  abs=0.005 + 1e-9)
         assert art["images"][k].get_array().shape == (64, 64, 3)
+        assert art["images"][k].get_array().dtype == np.uint8
     plt.close("all")
 
     cases = ps.ALIASING_CASES[-1:]
@@ -385,3 +389,21 @@ def test_figures_draw_what_the_maths_says():
     np.testing.assert_allclose(art["errors"][0], err, atol=1e-12)
     assert art["image"].get_array().shape == (1, 3, 3)
     plt.close("all")
+
+
+@pytest.mark.parametrize("incidence, view", [(40.0, -15.0), (30.0, -10.0), (-25.0, 60.0),
+                                             (0.0, 0.0), (80.0, 5.0)])
+def test_drawn_vectors_are_the_plane_geometry_to_display_precision(incidence, view):
+    """Q5(a) in the plane of incidence: R is L mirrored about the vertical normal (the angle
+    of reflection equals the angle of incidence) and H is at the mean of the two angles; the
+    figure gets them to 1e-4 and no finer."""
+    from course_lib.plots import shading as ps
+
+    got = ps.drawn_vectors(incidence, view)
+    t, p = np.radians(incidence), np.radians(view)
+    want = {"N": (0.0, 1.0, 0.0), "L": (-np.sin(t), np.cos(t), 0.0),
+            "V": (-np.sin(p), np.cos(p), 0.0), "R": (np.sin(t), np.cos(t), 0.0),
+            "H": (-np.sin((t + p) / 2), np.cos((t + p) / 2), 0.0)}
+    for name, v in want.items():
+        np.testing.assert_allclose(got[name], v, rtol=0, atol=0.5e-4 + 1e-12, err_msg=name)
+        np.testing.assert_array_equal(got[name], np.round(got[name], 4), err_msg=name)

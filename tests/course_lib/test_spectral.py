@@ -7,6 +7,7 @@ import pytest
 
 from course_lib import shading
 from course_lib import spectral as sp
+from course_lib import spectral_render as sr
 
 colour = pytest.importorskip("colour")
 
@@ -133,7 +134,7 @@ def test_spectral_phong_reproduces_the_exam_per_wavelength():
     """Q5(b) per wavelength: a reflectance 0, 0, 1 at three samples under a flat light gives
     the exam's (0.0931, 0.0931, 0.699)."""
     g = shading.EXAM_Q5B
-    out = sp.spectral_phong([0.0, 0.0, 1.0], np.ones(3), g["Ia"], g["ka"], g["Ip"], g["kd"],
+    out = sr.spectral_phong([0.0, 0.0, 1.0], np.ones(3), g["Ia"], g["ka"], g["Ip"], g["kd"],
                             g["ks"], g["n"], g["L"], g["N"], g["V"])
     np.testing.assert_allclose(out, [0.0931, 0.0931, 0.699], atol=5e-4)
 
@@ -143,7 +144,7 @@ def test_spectral_phong_batches_and_light_scaling():
     N = rng.normal(size=(5, 3))
     rho = rng.uniform(0, 1, (5, 7))
     E = rng.uniform(0.5, 2.0, 7)
-    out = sp.spectral_phong(rho, E, 1.0, 0.2, 1.0, 0.6, 0.5, 20, (1, 1, 1), N, (0, 0, 1))
+    out = sr.spectral_phong(rho, E, 1.0, 0.2, 1.0, 0.6, 0.5, 20, (1, 1, 1), N, (0, 0, 1))
     assert out.shape == (5, 7)
     for i in range(5):
         # per wavelength the model is phong for a grey of that reflectance, times the light
@@ -238,7 +239,7 @@ def test_spectral_sphere_pixel_equals_per_wavelength_model():
     light = sp.triband_fluorescent
     refl = lambda w: sp.gaussian_band(w, 525.0, 25.0, 0.9, 0.05)
     L, V, size = (1.0, -1.0, 1.0), (0.0, -1.0, 0.2), 24
-    img = sp.render_sphere_spectral(light, refl, 1.0, 0.2, 1.0, 0.7, 0.5, 30.0, L, V, size)
+    img = sr.render_sphere_spectral(light, refl, 1.0, 0.2, 1.0, 0.7, 0.5, 30.0, L, V, size)
     normals, mask = shading.sphere_normals(V, size)
     wl = np.linspace(380.0, 780.0, 4001)
     E = light(wl) / sp.spectrum_to_XYZ(light(wl), wl)[1]
@@ -246,7 +247,7 @@ def test_spectral_sphere_pixel_equals_per_wavelength_model():
     rows, cols = np.nonzero(mask)
     for i in rng.choice(len(rows), 8, replace=False):
         N = normals[rows[i], cols[i]]
-        spd = sp.spectral_phong(refl(wl), E, 1.0, 0.2, 1.0, 0.7, 0.5, 30.0, L, N, V)
+        spd = sr.spectral_phong(refl(wl), E, 1.0, 0.2, 1.0, 0.7, 0.5, 30.0, L, N, V)
         expected = sp.XYZ_to_linear_srgb(sp.spectrum_to_XYZ(spd, wl))
         np.testing.assert_allclose(img[rows[i], cols[i]], expected, rtol=1e-9, atol=1e-12)
     assert np.all(img[~mask] == 0)
@@ -255,5 +256,5 @@ def test_spectral_sphere_pixel_equals_per_wavelength_model():
 def test_spectral_sphere_grey_surface_rgb_equals_spectral():
     grey = lambda w: 0.4 + 0 * w
     args = (sp.triband_fluorescent, grey, 1.0, 0.2, 1.0, 0.7, 0.5, 30.0, (1, 1, 1), (0, 0, 1), 16)
-    np.testing.assert_allclose(sp.render_sphere_spectral(*args, rgb_model=True),
-                               sp.render_sphere_spectral(*args), atol=1e-12)
+    np.testing.assert_allclose(sr.render_sphere_spectral(*args, rgb_model=True),
+                               sr.render_sphere_spectral(*args), atol=1e-12)

@@ -211,6 +211,54 @@ def test_students_q6_figures_are_the_instructors(tmp_path):
     explorer's display routine (C-level copies of the clipping references) shows what the
     instructors' shows, number for number and word for word, and the graded functions, the
     clipping machinery and ``course_lib._polygons`` are absent."""
+Q5_IN_STUDENT_ENV = r'''
+import pickle, sys
+import numpy as np
+import matplotlib
+matplotlib.use("Agg")
+from course_lib import shading, spectral
+from course_lib._spectral_spheres_data import load
+from course_lib.plots.shading import drawn_vectors
+from course_lib.widgets.shading import PhongExplorer, angles
+try:
+    import course_lib.spectral_render
+    spectral_render = "importable"
+except ImportError:
+    spectral_render = "absent"
+gone = [n for n in ("normalize", "reflect", "halfway", "phong", "blinn_phong", "phong_terms",
+                    "render_sphere", "highlight_pixel", "highlight_normal", "view_basis",
+                    "sphere_normals", "_shade", "_unit", "_normalised")
+        if hasattr(shading, n)]
+gone += [n for n in ("spectral_phong", "render_sphere_spectral") if hasattr(spectral, n)]
+ex = PhongExplorer(size=64)
+views = []
+for settings in SETTINGS:
+    ex.set(**settings)
+    views.append({"images": [np.array(im.get_array()) for im in ex.art["images"]],
+                  "peaks": list(ex.peaks), "probe": dict(ex.probe_values),
+                  "H": ex.halfway_shown, "readout": ex.readout.value,
+                  "crosses": [(a.get_xdata(), a.get_ydata()) for a in ex.art["analytic"]]})
+ex.load_exam()
+with open(sys.argv[1], "wb") as f:
+    pickle.dump({"gone": gone, "spectral_render": spectral_render, "views": views,
+                 "exam": ex.readout.value, "pixels": load()["images"],
+                 "vectors": drawn_vectors(40.0, -15.0), "angles": angles([1.0, -1.0, 1.0])}, f)
+'''
+
+Q5_SETTINGS = [
+    {"colour": "#3366ff", "ka": 0.2, "kd": 0.6, "ks": 0.8, "n": 20.0},
+    {"light_azimuth": 60.0, "light_elevation": 40.0, "view_azimuth": 100.0, "view_elevation": 20.0},
+    {"n": 500.0, "colour": "#ff0000", "kd": 0.0},
+    {"view_azimuth": 0.0, "view_elevation": 0.0, "light_azimuth": 180.0, "light_elevation": 0.0},
+]
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("student_env")
+def test_students_q5_figures_are_the_instructors(tmp_path):
+    """In the students' environment: the Phong explorer draws the instructors' spheres byte for
+    byte and shows the same readouts, the spectral spheres are the references' pixels, and
+    neither the five graded functions, their helpers nor course_lib.spectral_render are there."""
     if shutil.which("gcc") is None:
         pytest.skip("no C compiler (make wheel-deps)")
     import pickle
@@ -245,3 +293,39 @@ def test_students_q6_figures_are_the_instructors(tmp_path):
     assert "after plane 6 of 6, far" in got["status"] and "4 vertices" in got["status"]
     drawn, want = got["drawn"][:-1], np.array([[0, 0.5], [0.5, 0.5], [0.5, 1], [0.25, 1]])
     assert any(np.allclose(np.roll(drawn, k, axis=0), want, atol=1e-12) for k in range(4)), drawn
+    import matplotlib
+    import numpy as np
+    import studentenv
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from course_lib import _spectral_spheres_data
+    from course_lib.plots.shading import drawn_vectors
+    from course_lib.widgets.shading import PhongExplorer, angles
+
+    out = tmp_path / "q5.pkl"
+    script = Q5_IN_STUDENT_ENV.replace("SETTINGS", repr(Q5_SETTINGS))
+    proc = studentenv.run(script, str(out), cwd=tmp_path, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    got = pickle.loads(out.read_bytes())
+    assert got["gone"] == [] and got["spectral_render"] == "absent"
+    np.testing.assert_array_equal(got["pixels"], _spectral_spheres_data.compute()["images"])
+    ex = PhongExplorer(size=64)
+    try:
+        for settings, view in zip(Q5_SETTINGS, got["views"]):
+            ex.set(**settings)
+            for k in (0, 1):
+                np.testing.assert_array_equal(view["images"][k], ex.art["images"][k].get_array())
+                np.testing.assert_array_equal(view["crosses"][k][0], ex.art["analytic"][k].get_xdata())
+            assert view["peaks"] == ex.peaks and view["readout"] == ex.readout.value
+            for key, values in ex.probe_values.items():
+                np.testing.assert_array_equal(view["probe"][key], values)
+        ex.load_exam()
+        assert got["exam"] == ex.readout.value and "0.0931" in got["exam"]
+    finally:
+        plt.close(ex.fig)
+    want = drawn_vectors(40.0, -15.0)
+    for name, v in want.items():
+        np.testing.assert_array_equal(got["vectors"][name], v)
+    assert got["angles"] == angles([1.0, -1.0, 1.0])
