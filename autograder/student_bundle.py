@@ -54,7 +54,6 @@ SHIPPED_AS_SOURCE = ("course_lib.answers", "course_lib.variants")
 #: function's reference is left out of the wheel (:func:`withheld_functions`).
 #: docs/students-copy.md gives the plan that empties this set.
 STILL_SHIPPED = frozenset({
-    "displayed_thickness",                                               # q1 B-scan explorer
     "collimator_resolution", "open_fraction", "pmt_gain", "ring_hole_positions",  # q2
     "end_derivatives", "end_rows", "parameter_row", "phantom_point",      # q4 explorer, figures
     "catmull_rom_basis", "bspline_basis",                                 # q4 splines.basis
@@ -67,6 +66,13 @@ LEFT_OUT_HELPERS = {
     "course_lib.marching_cubes": (
         "_check_volume", "_active_cells", "_march", "_axis_vertices", "marching_cubes_loop",
         "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation"),
+    "course_lib.ultrasound": ("phantom_interfaces", "displayed_faces"),  # q1: displayed depths
+}
+#: shipped routines that compute with left-out functions yet answer no graded question (they
+#: return text, whole figures or numbers at display precision); ``{module: (qualname, ...)}``
+INLINE_INTO = {
+    "course_lib.plots.ultrasound": ("bscan_summary", "displayed_outlines", "displayed_interfaces"),
+    "course_lib.widgets.ultrasound": ("BScanExplorer._write_readout",),   # q1 readout, text
 }
 #: modules the students' wheel does not carry at all (nothing of the students' copy needs
 #: them; no shipped module may import them)
