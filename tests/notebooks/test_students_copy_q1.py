@@ -102,7 +102,7 @@ def test_q1_answers_are_the_exams_arithmetic():
     # ten faces: the three blocks share their top's depth, the water block's floor is the gap's
     assert depths.size == 10 - 2 - 1
     np.testing.assert_allclose(depths[[0, -1]], [water, 2 * water + 40 * C0 / 1450.0],
-                               rtol=1e-12)        # the floor is drawn deepest under the fat
+                               rtol=1e-12, atol=0)   # the floor is drawn deepest under the fat
     assert np.any(np.isclose(depths, 6 * water, rtol=1e-12))
     assert np.any(np.isclose(others, 40 * C0 / 1450.0)) and np.any(np.isclose(others, 20.22))
 
