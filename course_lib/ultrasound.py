@@ -64,7 +64,10 @@ import numpy as np
 
 from ._validate import as_float_array, as_int, as_positive, as_scalar
 
-#: Speed of sound every clinical scanner assumes in soft tissue (m/s).
+#: Speed of sound every clinical scanner assumes in soft tissue (m/s). The functions the
+#: students' wheel copies into its figures' routines (``displayed_thickness``,
+#: ``phantom_interfaces``, ``displayed_faces``) spell it out as their default: a default is
+#: read where the copy is defined, which is not this module.
 C_ASSUMED = 1540.0
 
 #: Acoustic properties used by the simulator: speed ``c`` (m/s), density ``rho`` (kg/m^3),
@@ -90,7 +93,7 @@ _SPECKLE_DB = -38.0
 # the graded functions
 
 
-def displayed_thickness(thickness, c_true, c_assumed=C_ASSUMED):
+def displayed_thickness(thickness, c_true, c_assumed=1540.0):
     """Thickness a scanner displays for a layer whose real sound speed differs from its assumption.
 
     Parameters
@@ -469,7 +472,7 @@ def _column_layers(blocks, floor_depth, x, bath, speeds):
 
 
 def phantom_interfaces(blocks, floor_depth, width, x=None, *, bath="water", speeds=None,
-                       c_assumed=C_ASSUMED, nx=256):
+                       c_assumed=1540.0, nx=256):
     """True and displayed depth of every interface under each image column.
 
     Parameters
@@ -519,7 +522,7 @@ def phantom_interfaces(blocks, floor_depth, width, x=None, *, bath="water", spee
     return x, true_depth, shown
 
 
-def displayed_faces(phantom, speeds=None, c_assumed=C_ASSUMED, n_floor=400):
+def displayed_faces(phantom, speeds=None, c_assumed=1540.0, n_floor=400):
     """Where the scanner draws the phantom: each block's displayed top and bottom face, then the
     displayed floor across the image.
 

@@ -513,3 +513,12 @@ def test_speckle_draws_are_the_seeds_draws_kept_read_only():
     with pytest.raises(ValueError):                      # nor made writable again
         uniform.flags.writeable = True
     assert not np.array_equal(_speckle_draws(None, 3, 11)[1], _speckle_draws(None, 3, 11)[1])
+
+
+@pytest.mark.parametrize("name", ["displayed_thickness", "displayed_depths", "phantom_interfaces",
+                                  "displayed_faces", "simulate_bscan"])
+def test_every_default_assumed_speed_is_the_scanners(name):
+    import inspect
+
+    default = inspect.signature(getattr(us, name)).parameters["c_assumed"].default
+    assert default == us.C_ASSUMED == 1540.0
