@@ -54,6 +54,9 @@ SHIPPED_AS_SOURCE = ("course_lib.answers", "course_lib.variants")
 #: explorer, a figure or a release notebook's cell computes with them; every other graded
 #: function's reference is left out of the wheel (:func:`withheld_functions`).
 #: docs/students-copy.md gives the plan that empties this set.
+<<<<<<< HEAD
+STILL_SHIPPED: frozenset[str] = frozenset()
+=======
 STILL_SHIPPED: frozenset[str] = frozenset()
 #: helpers the students' wheel leaves out with the graded functions: each computes a left-out
 #: function's answer (or part of it) or calls one; ``{module: (function, ...)}``

@@ -64,7 +64,10 @@ import numpy as np
 
 from ._validate import as_float_array, as_int, as_positive, as_scalar
 
-#: Speed of sound every clinical scanner assumes in soft tissue (m/s).
+#: Speed of sound every clinical scanner assumes in soft tissue (m/s). The functions the
+#: students' wheel copies into its figures' routines (``displayed_thickness``,
+#: ``phantom_interfaces``, ``displayed_faces``) spell it out as their default: a default is
+#: read where the copy is defined, which is not this module.
 C_ASSUMED = 1540.0
 
 #: Acoustic properties used by the simulator: speed ``c`` (m/s), density ``rho`` (kg/m^3),
@@ -90,7 +93,7 @@ _SPECKLE_DB = -38.0
 # the graded functions
 
 
-def displayed_thickness(thickness, c_true, c_assumed=C_ASSUMED):
+def displayed_thickness(thickness, c_true, c_assumed=1540.0):
     """Thickness a scanner displays for a layer whose real sound speed differs from its assumption.
 
     Parameters
@@ -469,7 +472,7 @@ def _column_layers(blocks, floor_depth, x, bath, speeds):
 
 
 def phantom_interfaces(blocks, floor_depth, width, x=None, *, bath="water", speeds=None,
-                       c_assumed=C_ASSUMED, nx=256):
+                       c_assumed=1540.0, nx=256):
     """True and displayed depth of every interface under each image column.
 
     Parameters
@@ -517,6 +520,64 @@ def phantom_interfaces(blocks, floor_depth, width, x=None, *, bath="water", spee
     true_depth = np.where(valid, top, np.nan)[:, 1:K + 1]
     shown = np.where(valid, disp_top, np.nan)[:, 1:K + 1]
     return x, true_depth, shown
+
+
+def displayed_faces(phantom, speeds=None, c_assumed=1540.0, n_floor=400):
+    """Where the scanner draws the phantom: each block's displayed top and bottom face, then the
+    displayed floor across the image.
+
+    Parameters
+    ----------
+    phantom : dict
+        As returned by :func:`exam_phantom`.
+    speeds : dict, optional
+        Overrides of the sound speed by material name.
+    c_assumed : float
+        Speed the scanner assumes (m/s).
+    n_floor : int
+        Columns across the image for the floor.
+
+    Returns
+    -------
+    faces : list of (top, bottom)
+        Displayed depth (mm) of each block's faces, in the order of ``phantom["blocks"]``.
+    x, floor : ndarray (n_floor,)
+        Column positions and the displayed floor under each (a step line).
+
+    Notes
+    -----
+    Q1(c), from :func:`phantom_interfaces` (a block's lateral size is unchanged).
+    """
+    blocks, depth, width = phantom["blocks"], phantom["floor_depth"], phantom["width"]
+    faces = []
+    for _, x0, x1, z0, z1 in blocks:
+        _, true, shown = phantom_interfaces(blocks, depth, width, x=[(x0 + x1) / 2],
+                                            bath=phantom["bath"], speeds=speeds,
+                                            c_assumed=c_assumed)
+        row_t, row_s = true[0], shown[0]
+        faces.append((float(row_s[np.flatnonzero(np.isclose(row_t, z0))[0]]),
+                      float(row_s[np.flatnonzero(np.isclose(row_t, z1))[0]])))
+    x = np.linspace(0, width, as_int(n_floor, "n_floor", minimum=2))
+    _, _, shown = phantom_interfaces(blocks, depth, width, x=x, bath=phantom["bath"],
+                                     speeds=speeds, c_assumed=c_assumed)
+    return faces, x, np.nanmax(shown, axis=1)
+
+
+def to_display_precision(values, scale=None):
+    """``values`` (NaN allowed) rounded to a decimal step of about 1e-4 of ``scale`` (by default
+    the largest of them in magnitude): 0.01 mm for the exam's phantom, drawn about 62 mm deep.
+
+    Far finer than a figure's pixel or a 0.1 mm readout, far coarser than the grader's 1e-6
+    relative: what the figures draw answers no hidden case of a graded function. The step
+    follows the data, so no choice of units or of ``c_assumed`` makes it relatively finer.
+    """
+    v = np.asarray(values, dtype=float)
+    if scale is None:
+        scale = np.nanmax(np.abs(v)) if np.any(np.isfinite(v)) else 0.0
+    if not (np.isfinite(scale) and scale > 0):
+        return v
+    step = 10.0 ** np.round(np.log10(1e-4 * scale))
+    return np.round(v / step) * step
 
 
 # --------------------------------------------------------------------------------------------

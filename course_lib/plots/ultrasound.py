@@ -92,7 +92,7 @@ def plot_bscan(image, extent, ax=None, phantom=None, speeds=None, c_assumed=us.C
     speeds, c_assumed
         Used with ``show_displayed`` to draw where the scanner puts each block (solid).
     show_displayed : bool
-        Also draw the displayed outlines from :func:`course_lib.ultrasound.phantom_interfaces`.
+        Also draw the displayed outlines (:func:`displayed_outlines`, at display precision).
 
     Returns
     -------
@@ -129,41 +129,40 @@ def plot_bscan(image, extent, ax=None, phantom=None, speeds=None, c_assumed=us.C
 def bscan_summary(phantom, speeds=None, c_assumed=us.C_ASSUMED) -> str:
     """Q1(c) in words, for the B-scan's text alternative: each block's true depths and
     thickness and where the scanner draws it, then the floor under a gap and its deepest
-    displayed point (the numbers a student reads off the picture)."""
-    outlines = displayed_outlines(phantom, speeds, c_assumed)
+    displayed point (the numbers a student reads off the picture, three figures)."""
+    faces, _x, floor = us.displayed_faces(phantom, speeds, c_assumed)
     parts = []
-    for (name, _x0, _x1, z0, z1), (_xs, zs) in zip(phantom["blocks"], outlines):
-        top, bottom = float(zs[0]), float(zs[2])
+    for (name, _x0, _x1, z0, z1), (top, bottom) in zip(phantom["blocks"], faces):
         parts.append(f"{name} block {num(z0)} to {num(z1)} mm deep ({num(z1 - z0)} mm thick) "
                      f"drawn from {num(top)} to {num(bottom)} mm ({num(bottom - top)} mm)")
-    floor = outlines[-1][1]
     return (f"Where the scanner, assuming {num(c_assumed)} m/s, draws the phantom: "
             + "; ".join(parts) + f"; the floor, {num(phantom['floor_depth'])} mm deep, drawn "
             f"between {num(np.nanmin(floor))} and {num(np.nanmax(floor))} mm.")
 
 
 def displayed_outlines(phantom, speeds=None, c_assumed=us.C_ASSUMED):
-    """Outlines ``[(xs, zs), ...]`` of each block as displayed, then the displayed floor.
+    """Outlines ``[(xs, zs), ...]`` of each block as displayed, then the displayed floor, at
+    display precision (:func:`course_lib.ultrasound.to_display_precision` of the deepest).
 
     The floor is a step line across the whole width; the blocks are rectangles whose top and
     bottom are the displayed depths of their faces (lateral size unchanged).
     """
-    out = []
-    for _, x0, x1, z0, z1 in phantom["blocks"]:
-        xm = np.array([(x0 + x1) / 2])
-        _, true, shown = us.phantom_interfaces(phantom["blocks"], phantom["floor_depth"],
-                                               phantom["width"], x=xm, bath=phantom["bath"],
-                                               speeds=speeds, c_assumed=c_assumed)
-        row_t, row_s = true[0], shown[0]
-        top = row_s[np.flatnonzero(np.isclose(row_t, z0))[0]]
-        bottom = row_s[np.flatnonzero(np.isclose(row_t, z1))[0]]
-        out.append(block_outline(x0, x1, top, bottom))
-    x = np.linspace(0, phantom["width"], 400)
-    _, _, shown = us.phantom_interfaces(phantom["blocks"], phantom["floor_depth"],
-                                        phantom["width"], x=x, bath=phantom["bath"],
-                                        speeds=speeds, c_assumed=c_assumed)
-    out.append((x, np.nanmax(shown, axis=1)))
+    faces, x, floor = us.displayed_faces(phantom, speeds, c_assumed)
+    deepest = float(np.nanmax(floor))
+    out = [block_outline(x0, x1, *us.to_display_precision(face, deepest))
+           for (_, x0, x1, _z0, _z1), face in zip(phantom["blocks"], faces)]
+    out.append((x, us.to_display_precision(floor, deepest)))
     return out
+
+
+def displayed_interfaces(phantom, x, speeds=None, c_assumed=us.C_ASSUMED):
+    """Displayed depth of every interface under the column at ``x`` (mm), shallowest first,
+    at display precision (Q1(c), for the A-lines' ticks)."""
+    _, _true, shown = us.phantom_interfaces(phantom["blocks"], phantom["floor_depth"],
+                                           phantom["width"], x=[x], bath=phantom["bath"],
+                                           speeds=speeds, c_assumed=c_assumed)
+    row = shown[0][np.isfinite(shown[0])]
+    return us.to_display_precision(row)
 
 
 def plot_aline(depth, envelope, x, columns, ax=None, labels=None, phantom=None, speeds=None,
@@ -199,11 +198,7 @@ def plot_aline(depth, envelope, x, columns, ax=None, labels=None, phantom=None, 
                           markersize=4, markevery=max(1, len(depth) // 12))
         lines.append(line)
         if phantom is not None:
-            _, _true, shown = us.phantom_interfaces(phantom["blocks"], phantom["floor_depth"],
-                                                   phantom["width"], x=[x[j]],
-                                                   bath=phantom["bath"], speeds=speeds,
-                                                   c_assumed=c_assumed)
-            for d in shown[0][np.isfinite(shown[0])]:
+            for d in displayed_interfaces(phantom, x[j], speeds, c_assumed):
                 markers.append(ax.axvline(d, color=colours[i % 4], linewidth=0.6, alpha=0.5))
     if phantom is not None:
         markers.append(ax.axvline(phantom["floor_depth"], color="k", linestyle=":",

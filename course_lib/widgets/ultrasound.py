@@ -133,22 +133,21 @@ class BScanExplorer:
         j = int(np.argmin(np.abs(x - xc)))
         return 20 * np.log10(np.maximum(env[:, j], 1e-6))
 
-    def displayed_heights(self) -> dict:
-        """Displayed height (mm) of each block under the current controls."""
-        sp = self.speeds
-        return {"fat": us.displayed_thickness(self.t_fat.value, sp["fat"]),
-                "liver": us.displayed_thickness(self.t_liver.value, sp["liver"]),
-                "water": us.displayed_thickness(self.t_water.value, sp["water"])}
-
     def _write_readout(self):
-        """The readout: each block's true and displayed height, and the displayed liver / fat
-        ratio (Q1(c))."""
-        h = self.displayed_heights()
+        """The readout: each block's true and displayed height (0.1 mm), and the displayed
+        liver / fat ratio (3 decimals), Q1(c). Only this text leaves the routine: the students'
+        copy computes the heights inside it and keeps none of them."""
         true = {"fat": self.t_fat.value, "liver": self.t_liver.value, "water": self.t_water.value}
-        parts = [f"{k} {true[k]:.0f} -> {h[k]:.1f} mm" for k in ("fat", "liver", "water")]
+        sp = self.speeds
+        fat = us.displayed_thickness(true["fat"], sp["fat"])
+        liver = us.displayed_thickness(true["liver"], sp["liver"])
+        water = us.displayed_thickness(true["water"], sp["water"])
+        parts = [f"fat {true['fat']:.0f} -> {fat:.1f} mm",
+                 f"liver {true['liver']:.0f} -> {liver:.1f} mm",
+                 f"water {true['water']:.0f} -> {water:.1f} mm"]
         self.readout.value = readout_html(
             f"block heights, true -> displayed: {', '.join(parts)}",
-            f"liver / fat as displayed: {h['liver'] / h['fat']:.3f}")
+            f"liver / fat as displayed: {liver / fat:.3f}")
 
     # ---------------------------------------------------------------------------------------
     @one_at_a_time

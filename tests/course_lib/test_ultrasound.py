@@ -442,15 +442,20 @@ def test_figures_draw_true_and_displayed_geometry():
         for line, (_, x0, x1, z0, z1) in zip(bscan["true"], ph["blocks"]):
             xs, zs = line.get_data()
             assert (min(xs), max(xs), min(zs), max(zs)) == (x0, x1, z0, z1)
+        # drawn at display precision: on a 0.01 mm grid (1e-4 of the ~62 mm displayed floor,
+        # rounded to a power of ten), so within 0.005 mm of the time-of-flight depth
         water = 10 * C0 / C_WATER
         fat_shown = np.asarray(bscan["displayed"][0].get_ydata())
-        assert fat_shown.min() == pytest.approx(water)
-        assert fat_shown.max() == pytest.approx(water + 40 * C0 / C_FAT)
+        assert fat_shown.min() == pytest.approx(water, abs=0.005)
+        assert fat_shown.max() == pytest.approx(water + 40 * C0 / C_FAT, abs=0.005)
         xs, floor = (np.asarray(a) for a in bscan["displayed"][-1].get_data())
         under_liver = floor[(xs > 36) & (xs < 49)]
-        np.testing.assert_allclose(under_liver, 2 * water + 40 * C0 / C_LIVER, atol=1e-12)
+        np.testing.assert_allclose(under_liver, 2 * water + 40 * C0 / C_LIVER, atol=0.005)
         in_gap = floor[xs < 9]
-        np.testing.assert_allclose(in_gap, 6 * water, atol=1e-12)
+        np.testing.assert_allclose(in_gap, 6 * water, atol=0.005)
+        for line in bscan["displayed"]:
+            zs = np.asarray(line.get_ydata())
+            np.testing.assert_allclose(zs * 100, np.round(zs * 100), atol=1e-6)
     finally:
         plt.close(fig)
 
@@ -508,3 +513,12 @@ def test_speckle_draws_are_the_seeds_draws_kept_read_only():
     with pytest.raises(ValueError):                      # nor made writable again
         uniform.flags.writeable = True
     assert not np.array_equal(_speckle_draws(None, 3, 11)[1], _speckle_draws(None, 3, 11)[1])
+
+
+@pytest.mark.parametrize("name", ["displayed_thickness", "displayed_depths", "phantom_interfaces",
+                                  "displayed_faces", "simulate_bscan"])
+def test_every_default_assumed_speed_is_the_scanners(name):
+    import inspect
+
+    default = inspect.signature(getattr(us, name)).parameters["c_assumed"].default
+    assert default == us.C_ASSUMED == 1540.0
