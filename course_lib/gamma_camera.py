@@ -26,6 +26,13 @@ the solid angle it subtends (``weighting="isotropic"``) gives the exact answer f
 source. :func:`trace_photons` checks both with a vectorised Monte Carlo photon tracer, and
 :func:`transmission_profile` / :func:`compare_models` show where the exam's model holds.
 
+The students' copy of the library holds none of the graded functions (:func:`pmt_gain`,
+:func:`collimator_resolution`, :func:`collimator_length_for_resolution`,
+:func:`ring_hole_positions`, :func:`open_fraction`) nor the helpers that give their answers under
+another name (:func:`pmt_cascade`, the two cut-off radii, :func:`transmission_profile`,
+:func:`compare_models`): writing them is the question. The exact model and the photon tracer
+are in both copies (docs/students-copy.md).
+
 Geometry and units
 ------------------
 Lengths in millimetres. The source is on the collimator axis at distance ``z`` in front of the
