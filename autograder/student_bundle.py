@@ -55,6 +55,9 @@ SHIPPED_AS_SOURCE = ("course_lib.answers", "course_lib.variants")
 #: function's reference is left out of the wheel (:func:`withheld_functions`).
 #: docs/students-copy.md gives the plan that empties this set.
 <<<<<<< HEAD
+<<<<<<< HEAD
+STILL_SHIPPED: frozenset[str] = frozenset()
+=======
 STILL_SHIPPED: frozenset[str] = frozenset()
 =======
 STILL_SHIPPED: frozenset[str] = frozenset()

@@ -26,6 +26,13 @@ the solid angle it subtends (``weighting="isotropic"``) gives the exact answer f
 source. :func:`trace_photons` checks both with a vectorised Monte Carlo photon tracer, and
 :func:`transmission_profile` / :func:`compare_models` show where the exam's model holds.
 
+The students' copy of the library holds none of the graded functions (:func:`pmt_gain`,
+:func:`collimator_resolution`, :func:`collimator_length_for_resolution`,
+:func:`ring_hole_positions`, :func:`open_fraction`) nor the helpers that give their answers under
+another name (:func:`pmt_cascade`, the two cut-off radii, :func:`transmission_profile`,
+:func:`compare_models`): writing them is the question. The exact model and the photon tracer
+are in both copies (docs/students-copy.md).
+
 Geometry and units
 ------------------
 Lengths in millimetres. The source is on the collimator axis at distance ``z`` in front of the
@@ -144,7 +151,8 @@ def pmt_gain_monte_carlo(delta, n_dynodes, n_events, rng=None, photoelectrons=1)
     n_events : int
         Number of independent pulses to simulate, at least 1.
     rng : None, int or numpy.random.Generator
-        Seed or generator for reproducible draws.
+        Seed or generator for reproducible draws (NumPy's own ``Generator``: a subclass whose
+        ``poisson`` returned its mean would turn the simulation into :func:`pmt_gain`).
     photoelectrons : int
         Photo-electrons starting each pulse (default 1).
 
@@ -152,16 +160,31 @@ def pmt_gain_monte_carlo(delta, n_dynodes, n_events, rng=None, photoelectrons=1)
     -------
     numpy.ndarray
         Shape ``(n_events,)``, float64: electrons collected by the anode in each pulse.
+
+    Raises
+    ------
+    ValueError
+        Bad sizes, or ``rng`` a subclass of ``numpy.random.Generator``.
     """
     delta = as_scalar(as_positive(delta, "delta"), "delta")
     n = as_int(n_dynodes, "n_dynodes", minimum=0)
     n_events = as_int(n_events, "n_events", minimum=1)
     photoelectrons = as_int(photoelectrons, "photoelectrons", minimum=0)
-    rng = np.random.default_rng(rng)
+    rng = _generator(rng)
     electrons = np.full(n_events, photoelectrons, dtype=np.int64)
     for _ in range(n):
         electrons = rng.poisson(delta * electrons)
     return electrons.astype(np.float64)
+
+
+def _generator(rng):
+    """NumPy's random generator for ``rng`` (``None``, a seed or a generator); ``ValueError``
+    for a subclass of ``numpy.random.Generator``, whose draws could be anything (e.g. the mean:
+    then the simulated cascade is the exact gain)."""
+    if isinstance(rng, np.random.Generator) and type(rng) is not np.random.Generator:
+        raise ValueError(f"rng must be a seed or a numpy.random.Generator, not a "
+                         f"{type(rng).__name__}")
+    return np.random.default_rng(rng)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -689,7 +712,7 @@ def trace_photons(holes_xy, d, L, source_distance, collimator_radius, n_photons,
     chunk = as_int(chunk, "chunk", minimum=1)
     if emission not in _WEIGHTINGS:
         raise ValueError(f"emission must be one of {_WEIGHTINGS}, got {emission!r}")
-    rng = np.random.default_rng(rng)
+    rng = _generator(rng)
     a2 = (d / 2.0) ** 2
     grow = (z + L) / z
     counts = np.zeros(len(holes), dtype=np.int64)

@@ -54,11 +54,12 @@ from matplotlib.transforms import Affine2D
 
 from .. import gamma_camera as gc
 from ..plotting import COLOURS
-from ..plots.gamma_camera import OPEN, SEPTUM, SHUT
+from ..plots.gamma_camera import (OPEN, SEPTUM, SHUT, display_rounded, shares_shown,
+                                  significant)
 from ._view import FigureExplorer, one_at_a_time, readout_html
 
-__all__ = ["CollimatorExplorer", "EXAM_SETTINGS", "collimator_explorer", "face_limit",
-           "face_radius", "hole_draw_radius"]
+__all__ = ["CollimatorExplorer", "EXAM_SETTINGS", "collimator_explorer", "collimator_model",
+           "face_limit", "face_radius", "hole_draw_radius"]
 
 #: The notebook's givens for Q2(d) (our reconstruction of the question, see the notebook).
 EXAM_SETTINGS = {"d": 1.0, "L": 40.0, "z": 1000.0, "pitch": 10.0, "n_rings": 4}
@@ -94,6 +95,40 @@ def hole_draw_radius(d: float, pitch: float, n_rings: int) -> float:
     return max(0.35 * spacing, d / 2.0)
 
 
+def collimator_model(d, L, z, pitch, n_rings) -> dict:
+    """The explorer's numbers for one setting of its sliders, at display precision (Q2(c)-(d)).
+
+    ``{"holes": the hole centres (to 1e-4 of the face radius), "exam_open": each hole's 0/1
+    verdict r L / z <= d, "exact_share": the share of its mouth's photons that pass
+    (``plots.gamma_camera.shares_shown``), "results": the readout's numbers to the digits it
+    shows}``: 4 significant figures, the exam / exact ratio to 3, the hole-equivalents to 2
+    decimals, the side view's label of R as text (see :class:`CollimatorExplorer`).
+    """
+    Rf = face_radius(pitch, n_rings)
+    holes = gc.ring_hole_positions(pitch, n_rings)
+    r = np.hypot(holes[:, 0], holes[:, 1])
+    exam_open = (r * L / z <= d).astype(np.float64)       # the rule of gc.open_fraction
+    area = np.atleast_1d(gc.hole_pass_area(r, d, L, z))
+    share = area / (np.pi * d**2 / 4.0)
+    exam = gc.open_fraction(holes, d, L, z, Rf)
+    exact = float(area.sum() / (np.pi * Rf**2))
+    resolution = gc.collimator_resolution(d, L, z)
+    results = {
+        "n_holes": len(holes), "n_open": int(exam_open.sum()), "face_radius": Rf,
+        "cutoff_exam": significant(gc.exam_cutoff_radius(d, L, z)),
+        "cutoff_exact": significant(gc.exact_cutoff_radius(d, L, z)),
+        "exam_fraction": significant(exam), "exact_fraction": significant(exact),
+        "isotropic_fraction": significant(gc.exact_open_fraction(holes, d, L, z, Rf,
+                                                                 "isotropic")),
+        "ratio": significant(exam / exact, 3) if exact > 0 else float("inf"),
+        "resolution": significant(resolution), "resolution_label": f"{resolution:.3g}",
+        "overlap": bool(n_rings >= 1 and d >= 2.0 * pitch * np.sin(np.pi / 8.0)),
+        "hole_equivalents": float(f"{share.sum():.2f}"),
+    }
+    return {"holes": display_rounded(holes, Rf), "exam_open": exam_open,
+            "exact_share": shares_shown(share), "results": results}
+
+
 class CollimatorExplorer(FigureExplorer):
     """Interactive explorer of the parallel-hole collimator of Q2(c)-(d) (see the module docstring).
 
@@ -122,9 +157,11 @@ class CollimatorExplorer(FigureExplorer):
         Per hole: the exam's 0/1 verdict and the exact share of its mouth's photons that pass.
     results : dict
         ``n_holes``, ``n_open``, ``face_radius``, ``cutoff_exam``, ``cutoff_exact``,
-        ``exam_fraction``, ``exact_fraction`` (uniform), ``isotropic_fraction``,
-        ``hole_equivalents`` (the exact shares summed over the holes) and ``resolution``
-        after the last update.
+        ``exam_fraction``, ``exact_fraction`` (uniform), ``isotropic_fraction``, ``ratio``
+        (exam / exact), ``hole_equivalents`` (the exact shares summed over the holes),
+        ``resolution`` and ``resolution_label`` after the last update.
+
+    Every number kept here is at display precision (:func:`collimator_model`).
     """
 
     def __init__(self, d=1.0, L=40.0, z=1000.0, pitch=10.0, n_rings=4):
@@ -266,29 +303,13 @@ class CollimatorExplorer(FigureExplorer):
         d, L, z = self.d.value, self.L.value, self.z.value
         pitch, n = self.pitch.value, int(self.n_rings.value)
         Rf = face_radius(pitch, n)
-        self.holes = gc.ring_hole_positions(pitch, n)
-        r = np.hypot(self.holes[:, 0], self.holes[:, 1])
-        # Q2(d): open when r L / z <= d (the rule of gc.open_fraction, per hole)
-        self.exam_open = (r * L / z <= d).astype(np.float64)
-        area = np.atleast_1d(gc.hole_pass_area(r, d, L, z))
-        self.exact_share = area / (np.pi * d**2 / 4.0)
-        res = {
-            "n_holes": len(self.holes),
-            "n_open": int(self.exam_open.sum()),
-            "face_radius": Rf,
-            "cutoff_exam": gc.exam_cutoff_radius(d, L, z),
-            "cutoff_exact": gc.exact_cutoff_radius(d, L, z),
-            "exam_fraction": gc.open_fraction(self.holes, d, L, z, Rf),
-            "exact_fraction": float(area.sum() / (np.pi * Rf**2)),
-            "isotropic_fraction": gc.exact_open_fraction(self.holes, d, L, z, Rf, "isotropic"),
-            "resolution": gc.collimator_resolution(d, L, z),
-            "overlap": bool(n >= 1 and d >= 2.0 * pitch * np.sin(np.pi / 8.0)),
-            "hole_equivalents": float(self.exact_share.sum()),
-        }
-        self.results = res
+        model = collimator_model(d, L, z, pitch, n)
+        self.holes, self.exam_open = model["holes"], model["exam_open"]
+        self.exact_share = model["exact_share"]
+        self.results = res = model["results"]
 
         radius = hole_draw_radius(d, pitch, n)
-        lim = face_limit(max(Rf, float(r.max()) + radius))
+        lim = face_limit(max(Rf, n * pitch + radius))     # the last ring is n pitches out
         # the holes' outlines change with d, the pitch and the rings only (not with L or z)
         outline = (pitch, n, radius)
         circles = None
@@ -315,18 +336,19 @@ class CollimatorExplorer(FigureExplorer):
         self.ax_exam.title.set_text(f"Q2(d) exam model: {res['n_open']} of {res['n_holes']} "
                                     f"holes open{size}")
         self.ax_exact.title.set_text(f"exact lens-overlap model{size}")
-        self._update_side(d, L, z, res["resolution"])
+        self._update_side(d, L, z, res["resolution"], res["resolution_label"])
         self.readout.value = self._readout_html(d, L, z, res)
 
-    def _update_side(self, d, L, z, R):
-        """Q2(c): move the side view's septa, rays, bracket and labels to ``d, L, z``."""
+    def _update_side(self, d, L, z, R, R_text):
+        """Q2(c): move the side view's septa, rays, bracket and labels to ``d, L, z`` (``R``
+        the resolution to 4 significant figures, ``R_text`` as the label writes it)."""
         s = self.art["side"]
         w = 1.2 * d
         s["septa"][0].set_bounds(-d / 2 - w, -L, w, L)
         s["septa"][1].set_bounds(d / 2, -L, w, L)
         for sign, ray in zip((1, -1), s["rays"]):
             ray.set_data([0.0, sign * R / 2], [-L, z])
-        far = d / 2 + d * z / L                    # edge-to-edge ray at the source plane
+        far = significant(d / 2 + d * z / L)       # edge-to-edge ray at the source plane
         for sign, ray in zip((1, -1), s["extreme"]):
             ray.set_data([-sign * d / 2, sign * far], [-L, z])
         s["bracket"].set_data([-R / 2, R / 2], [z, z])
@@ -336,7 +358,7 @@ class CollimatorExplorer(FigureExplorer):
         s["source"].set_data([0.0], [z])
         top = 1.15 * z + 0.1 * L
         lab = s["labels"]
-        lab["R"].set_text(f"R = d(L+z)/L = {R:.3g} mm")
+        lab["R"].set_text(f"R = d(L+z)/L = {R_text} mm")
         lab["R"].set_position((0.0, z + 0.03 * (z + L)))
         lab["L"].set_text(f"L = {L:g} mm")
         lab["d"].set_text(f"d = {d:g} mm")
@@ -375,8 +397,7 @@ class CollimatorExplorer(FigureExplorer):
                 head, resolution, "<span style='color:#d62728'>the holes are wider than their "
                 "spacing and overlap: no septa are left between them, so neither model applies "
                 "(no open fraction or transmission is shown)</span>")
-        ratio = (res["exam_fraction"] / res["exact_fraction"]
-                 if res["exact_fraction"] > 0 else float("inf"))
+        ratio = res["ratio"]
         return readout_html(
             head,
             f"<b>exam model</b> (Q2(d)): {res['n_open']} of {res['n_holes']} holes open, "

@@ -145,9 +145,12 @@ def test_staged_library_imports_without_the_left_out_functions(tmp_path):
 
 def test_staging_refuses_a_module_that_uses_a_function_left_out_elsewhere(tmp_path, monkeypatch):
     """``collimator_resolution`` is drawn by the q2 figures and explorer, in other modules: left
-    out, the build stops with their name instead of shipping an explorer that fails to load."""
+    out without their routines in ``INLINE_INTO``, the build stops with their name instead of
+    shipping an explorer that fails to load."""
     monkeypatch.setattr(student_bundle, "withheld_functions",
                         lambda: {"course_lib.gamma_camera": ("collimator_resolution",)})
+    monkeypatch.setattr(student_bundle, "LEFT_OUT_HELPERS", {})
+    monkeypatch.setattr(student_bundle, "INLINE_INTO", {})
     with pytest.raises(ValueError, match=r"gamma_camera\.py names \['collimator_resolution'\]"):
         student_bundle.stage_sources(tmp_path, "0" * 64)
 

@@ -259,6 +259,43 @@ def test_students_q5_figures_are_the_instructors(tmp_path):
     """In the students' environment: the Phong explorer draws the instructors' spheres byte for
     byte and shows the same readouts, the spectral spheres are the references' pixels, and
     neither the five graded functions, their helpers nor course_lib.spectral_render are there."""
+Q2_SETTINGS = [(1.0, 40.0, 1000.0, 10.0, 4), (0.7, 33.0, 770.0, 7.5, 5), (2.3, 120.0, 260.0, 6.0, 8),
+               (0.4, 5.0, 3000.0, 2.0, 0), (3.1, 17.0, 90.0, 19.5, 2)]
+
+Q2_IN_STUDENT_ENV = r'''
+import pickle, sys
+import numpy as np
+from course_lib import collimator_results, gamma_camera
+from course_lib._collimator_results_data import load
+from course_lib.plots import gamma_camera as pg
+from course_lib.widgets.gamma_camera import CollimatorExplorer, collimator_model
+settings = SETTINGS
+gone = [n for n in ("pmt_gain", "collimator_resolution", "collimator_length_for_resolution",
+                    "ring_hole_positions", "open_fraction", "pmt_cascade", "exam_cutoff_radius",
+                    "exact_cutoff_radius", "transmission_profile", "compare_models")
+        if hasattr(gamma_camera, n)]
+holes = collimator_results.exam_holes()
+ex = CollimatorExplorer()
+ex.set(d=0.7, L=33.0, z=770.0, pitch=7.5, n_rings=5)
+with open(sys.argv[1], "wb") as f:
+    pickle.dump({"gone": gone, "data": dict(load()),
+                 "models": [collimator_model(*s) for s in settings],
+                 "labels": [pg.cascade_labels(4.0, 10), pg.cascade_labels(2.7, 7)],
+                 "resolution": [pg.shown_resolution(*s[:3]) for s in settings],
+                 "verdicts": pg.hole_verdicts(holes, 1.0, 40.0, 1000.0),
+                 "profile": pg.profile_curves(1.0, 40.0, 1000.0),
+                 "curves": pg.model_curves(holes, 1.0, 40.0, np.linspace(50.0, 3000.0, 24), 50.0),
+                 "readout": ex.readout.value, "results": ex.results}, f)
+'''
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("student_env")
+def test_students_q2_figures_are_the_instructors(tmp_path):
+    """In the students' environment: q2's routines give what they give in the instructors'
+    copy (the references inlined as C functions), the shipped results are the references' bit
+    for bit, the explorer reads out the same text, and the graded functions and their helpers
+    are absent from ``course_lib.gamma_camera``."""
     if shutil.which("gcc") is None:
         pytest.skip("no C compiler (make wheel-deps)")
     import pickle
@@ -329,3 +366,43 @@ def test_students_q5_figures_are_the_instructors(tmp_path):
     for name, v in want.items():
         np.testing.assert_array_equal(got["vectors"][name], v)
     assert got["angles"] == angles([1.0, -1.0, 1.0])
+    from course_lib import _collimator_results_data
+    from course_lib.plots import gamma_camera as pg
+    from course_lib.widgets import gamma_camera as wg
+
+    out = tmp_path / "q2.pkl"
+    code = Q2_IN_STUDENT_ENV.replace("SETTINGS", repr(Q2_SETTINGS))
+    proc = studentenv.run(code, str(out), cwd=tmp_path, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    got = pickle.loads(out.read_bytes())
+    assert got["gone"] == []
+    ref = _collimator_results_data.load()
+    assert sorted(got["data"]) == sorted(ref)
+    for name, array in ref.items():
+        np.testing.assert_array_equal(got["data"][name], array, err_msg=name)
+    for setting, model in zip(Q2_SETTINGS, got["models"]):
+        want = wg.collimator_model(*setting)
+        assert model["results"] == want["results"], setting
+        for key in ("holes", "exam_open", "exact_share"):
+            np.testing.assert_array_equal(model[key], want[key], err_msg=f"{setting} {key}")
+    assert got["labels"] == [pg.cascade_labels(4.0, 10), pg.cascade_labels(2.7, 7)]
+    assert got["resolution"] == [pg.shown_resolution(*s[:3]) for s in Q2_SETTINGS]
+    holes = ref["exam_holes"]
+    verdicts = pg.hole_verdicts(holes, 1.0, 40.0, 1000.0)
+    for key in ("exam", "exact"):
+        np.testing.assert_array_equal(got["verdicts"][key], verdicts[key], err_msg=key)
+    assert got["verdicts"]["cutoffs"] == verdicts["cutoffs"] == (25.0, 25.5)
+    profile = pg.profile_curves(1.0, 40.0, 1000.0)
+    for key in ("r", "exact", "exam"):
+        np.testing.assert_array_equal(got["profile"][key], profile[key], err_msg=key)
+    np.testing.assert_array_equal(
+        got["curves"], pg.model_curves(holes, 1.0, 40.0, np.linspace(50.0, 3000.0, 24), 50.0))
+    assert got["results"] == wg.collimator_model(0.7, 33.0, 770.0, 7.5, 5)["results"]
+    assert "open fraction" in got["readout"] and got["results"]["n_holes"] == 121
+    import matplotlib.pyplot as plt
+
+    ours = wg.CollimatorExplorer(d=0.7, L=33.0, z=770.0, pitch=7.5, n_rings=5)
+    try:
+        assert got["readout"] == ours.readout.value
+    finally:
+        plt.close(ours.fig)
