@@ -56,8 +56,6 @@ SHIPPED_AS_SOURCE = ("course_lib.answers", "course_lib.variants")
 STILL_SHIPPED = frozenset({
     "displayed_thickness",                                               # q1 B-scan explorer
     "collimator_resolution", "open_fraction", "pmt_gain", "ring_hole_positions",  # q2
-    "end_derivatives", "end_rows", "parameter_row", "phantom_point",      # q4 explorer, figures
-    "catmull_rom_basis", "bspline_basis",                                 # q4 splines.basis
     "normalize", "reflect", "halfway", "phong", "blinn_phong",            # q5 Phong explorer
     "clip_polygon", "fan_triangulate", "inside_view_volume", "screen_area", "to_screen",  # q6
 })
@@ -67,13 +65,20 @@ LEFT_OUT_HELPERS = {
     "course_lib.marching_cubes": (
         "_check_volume", "_active_cells", "_march", "_axis_vertices", "marching_cubes_loop",
         "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation"),
+    "course_lib.splines": ("basis_matrix", "end_weights", "_apply_rule", "extend_with_phantoms",
+                           "segment_geometries", "evaluate_curve"),
 }
 #: modules the students' wheel does not carry at all (nothing of the students' copy needs
 #: them; no shipped module may import them)
 INSTRUCTORS_ONLY = ("course_lib.mesh",)
 #: modules whose students' copy is generated when the wheel is built: the text their
 #: ``students_copy()`` returns (e.g. the results of the references on a figure's fixed inputs)
-GENERATED_MODULES = ("course_lib._mc_results_data",)
+GENERATED_MODULES = ("course_lib._mc_results_data", "course_lib._spline_weights_data")
+#: shipped routines that compute with left-out functions yet answer no graded question (they
+#: return whole figures or data at display precision); ``{module: (qualname, ...)}``
+INLINE_INTO = {
+    "course_lib.plots.splines": ("spline_scene", "plot_blending_functions"),
+}
 #: the instructors' requirements a student's environment needs (versions come from our own
 #: package metadata, so the two never disagree)
 STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "anywidget", "jupyterlab",

@@ -29,7 +29,7 @@ from ._validate import as_float_array, as_int, as_points
 __all__ = [
     "KINDS",
     "RULES",
-    "basis",
+    "basis_matrix",
     "bspline_basis",
     "catmull_rom_basis",
     "convex_hull",
@@ -50,19 +50,6 @@ __all__ = [
 KINDS = ("catmull-rom", "b-spline")
 #: The end rules of Q4(c): how the phantom point ``d`` is made from ``b`` and ``c``.
 RULES = ("d=b", "d=2c-b", "d=c")
-
-_CATMULL_ROM = 0.5 * np.array(
-    [[-1.0, 3.0, -3.0, 1.0],
-     [2.0, -5.0, 4.0, -1.0],
-     [-1.0, 0.0, 1.0, 0.0],
-     [0.0, 2.0, 0.0, 0.0]]
-)
-_BSPLINE = np.array(
-    [[-1.0, 3.0, -3.0, 1.0],
-     [3.0, -6.0, 3.0, 0.0],
-     [-3.0, 0.0, 3.0, 0.0],
-     [1.0, 4.0, 1.0, 0.0]]
-) / 6.0
 
 
 # --------------------------------------------------------------------------------------------
@@ -92,7 +79,12 @@ def catmull_rom_basis() -> np.ndarray:
     >>> [6, 2, 0, 0] @ catmull_rom_basis()
     array([-1.,  4., -5.,  2.])
     """
-    return _CATMULL_ROM.copy()
+    # written out here, not as a module constant, so that the matrix leaves the students'
+    # wheel with the function (docs/students-copy.md)
+    return 0.5 * np.array([[-1.0, 3.0, -3.0, 1.0],
+                           [2.0, -5.0, 4.0, -1.0],
+                           [-1.0, 0.0, 1.0, 0.0],
+                           [0.0, 2.0, 0.0, 0.0]])
 
 
 def bspline_basis() -> np.ndarray:
@@ -114,10 +106,13 @@ def bspline_basis() -> np.ndarray:
     >>> np.round(6 * ([1, 1, 1, 1] @ bspline_basis()), 12)   # up to round-off
     array([0., 1., 4., 1.])
     """
-    return _BSPLINE.copy()
+    return np.array([[-1.0, 3.0, -3.0, 1.0],
+                     [3.0, -6.0, 3.0, 0.0],
+                     [-3.0, 0.0, 3.0, 0.0],
+                     [1.0, 4.0, 1.0, 0.0]]) / 6.0
 
 
-def basis(kind: str) -> np.ndarray:
+def basis_matrix(kind: str) -> np.ndarray:
     """The basis matrix of ``kind`` (``"catmull-rom"`` or ``"b-spline"``)."""
     kind = _check_kind(kind)
     return catmull_rom_basis() if kind == "catmull-rom" else bspline_basis()
@@ -445,7 +440,7 @@ def evaluate_curve(points, kind: str, u, order: int = 0, end_rule: str | None = 
     ValueError
         For bad points, kind, rule, order, or ``u`` outside ``[0, N]``.
     """
-    M = basis(kind)
+    M = basis_matrix(kind)
     order = _check_order(order)
     Gs = segment_geometries(points, end_rule)
     n_seg = Gs.shape[0]
@@ -497,7 +492,7 @@ def sample_curve(points, kind: str, n_per_segment: int, end_rule: str | None = N
            [1.5, 0.5],
            [2. , 1. ]])
     """
-    M = basis(kind)
+    M = basis_matrix(kind)
     n = as_int(n_per_segment, "n_per_segment", minimum=1)
     Gs = segment_geometries(points, end_rule)
     n_seg = Gs.shape[0]

@@ -25,6 +25,7 @@ __all__ = [
     "legend_handles",
     "plot_blending_functions",
     "plot_end_rules",
+    "display_decimals",
     "spline_scene",
     "update_curve",
 ]
@@ -75,19 +76,31 @@ def spline_scene(points, kind, end_rule=None, phantoms=None, n_per_segment=32):
         ext = np.vstack([ph[0], P, ph[1]])
     elif end_rule is None:
         ext = P
-        ph = np.empty((0, 2))
     else:
         ext = splines.extend_with_phantoms(P, end_rule)
-        ph = ext[[0, -1]]
-    M = splines.basis(kind)
+    M = splines.basis_matrix(kind)
     Gs = splines.segment_geometries(ext)
     t = np.linspace(0.0, 1.0, n_per_segment + 1)
-    rows = splines.parameter_row(t) @ M
-    segments = np.einsum("sj,ijk->isk", rows, Gs)
+    segments = np.einsum("sj,ijk->isk", splines.parameter_row(t) @ M, Gs)
     end = splines.end_derivatives(M, *Gs[-1])
+    # what is drawn and read out, at display precision (docs/students-copy.md)
+    decimals = display_decimals(ext)
+    ext = np.round(ext, decimals)
+    ph = ext[[0, -1]] if end_rule is not None else np.empty((0, 2))
     hull = splines.convex_hull(ext) if kind == "b-spline" else None
     return {"kind": kind, "end_rule": end_rule, "control": P, "extended": ext, "phantoms": ph,
-            "segments": segments, "abcd": Gs[-1], "end": end, "hull": hull}
+            "segments": np.round(segments, decimals), "abcd": ext[-4:],
+            "end": tuple(np.round(v, decimals) for v in end), "hull": hull}
+
+
+def display_decimals(points) -> int:
+    """Decimals that round a figure's coordinates to about 1e-4 of the span of ``points``
+    (its largest extent along an axis): far finer than a pixel, far coarser than the 1e-6 a
+    grader compares at."""
+    span = float(np.max(np.ptp(np.asarray(points, dtype=float), axis=0), initial=0.0))
+    if not np.isfinite(span) or span <= 0.0:
+        span = 1.0
+    return int(4 - np.floor(np.log10(span)))
 
 
 def draw_curve(scene, ax=None, *, show_hull=True, show_end=True, show_labels=True,
@@ -215,7 +228,8 @@ def plot_blending_functions(ax=None, n=101):
     t = np.linspace(0.0, 1.0, n)
     lines = []
     for kind, style in (("b-spline", "-"), ("catmull-rom", "--")):
-        W = splines.parameter_row(t) @ splines.basis(kind)
+        # weights between -0.1 and 1: rounded to display precision
+        W = np.round(splines.parameter_row(t) @ splines.basis_matrix(kind), 4)
         for j, name in enumerate("abcd"):
             lines += ax.plot(t, W[:, j], style, color=_WEIGHT_COLOURS[j], lw=2,
                              marker=_WEIGHT_MARKERS[j], markevery=max(1, (n - 1) // 5), ms=4,
