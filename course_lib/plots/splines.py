@@ -82,7 +82,8 @@ def spline_scene(points, kind, end_rule=None, phantoms=None, n_per_segment=32):
     Gs = splines.segment_geometries(ext)
     t = np.linspace(0.0, 1.0, n_per_segment + 1)
     segments = np.einsum("sj,ijk->isk", splines.parameter_row(t) @ M, Gs)
-    end = splines.end_derivatives(M, *Gs[-1])
+    a, b, c, d = Gs[-1]
+    end = splines.end_derivatives(M, a, b, c, d)
     # what is drawn and read out, at display precision (docs/students-copy.md)
     decimals = display_decimals(ext)
     ext = np.round(ext, decimals)
