@@ -74,18 +74,15 @@ LEFT_OUT_HELPERS = {
 #: stores nothing finer on an object. The students' copy of each calls C-level copies of the
 #: left-out functions it calls, which nothing else can reach (:mod:`autograder.inlining`);
 #: ``{module: (qualified name, ...)}``, methods as ``Class.method``
-INLINE_INTO: dict[str, tuple[str, ...]] = {}
+INLINE_INTO: dict[str, tuple[str, ...]] = {
+    "course_lib.plots.splines": ("spline_scene", "plot_blending_functions"),   # q4 figures
+}
 #: modules the students' wheel does not carry at all (nothing of the students' copy needs
 #: them; no shipped module may import them)
 INSTRUCTORS_ONLY = ("course_lib.mesh",)
 #: modules whose students' copy is generated when the wheel is built: the text their
 #: ``students_copy()`` returns (e.g. the results of the references on a figure's fixed inputs)
 GENERATED_MODULES = ("course_lib._mc_results_data", "course_lib._spline_weights_data")
-#: shipped routines that compute with left-out functions yet answer no graded question (they
-#: return whole figures or data at display precision); ``{module: (qualname, ...)}``
-INLINE_INTO = {
-    "course_lib.plots.splines": ("spline_scene", "plot_blending_functions"),
-}
 #: the instructors' requirements a student's environment needs (versions come from our own
 #: package metadata, so the two never disagree)
 STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "anywidget", "jupyterlab",
