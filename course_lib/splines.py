@@ -14,10 +14,13 @@ Whether the curve then *reaches* ``c`` depends on the spline and the rule: Catmu
 does, the B-spline only with ``d = 2c - b`` (with ``d = b`` it stops at ``(b + 2c) / 3``).
 
 Functions of the exercise contract: :func:`catmull_rom_basis`, :func:`bspline_basis`,
-:func:`parameter_row`, :func:`spline_eval`, :func:`end_derivatives`, :func:`phantom_point`,
-:func:`sample_curve`. Beyond the contract: :func:`end_rows`, :func:`end_weights`,
-:func:`extend_with_phantoms`, :func:`segment_geometries`, :func:`evaluate_curve`,
-:func:`convex_hull` and :func:`in_convex_hull`.
+:func:`parameter_row`, :func:`end_rows`, :func:`spline_eval`, :func:`end_derivatives`,
+:func:`phantom_point`, :func:`sample_curve`. Beyond the contract: :func:`basis_matrix`,
+:func:`end_weights`, :func:`extend_with_phantoms`, :func:`segment_geometries`,
+:func:`evaluate_curve`, :func:`convex_hull` and :func:`in_convex_hull`. The students' copy of
+the library holds only the last two (docs/students-copy.md): its figures draw the curves
+through :func:`course_lib.plots.splines.spline_scene`, rounded to display precision, and its
+tables of end weights are :mod:`course_lib.spline_weights`.
 """
 
 from __future__ import annotations

@@ -1,6 +1,9 @@
 """Figures for Q4: control polygons, segments, end derivatives and the B-spline's convex hull.
 
-:func:`spline_scene` computes everything a figure of one curve shows (pure NumPy, no drawing);
+:func:`spline_scene` computes everything a figure of one curve shows (pure NumPy, no drawing),
+rounded to display precision, 1e-4 of the points' span (:func:`display_decimals`): the
+students' copy computes it with the course's graded functions compiled into it alone, so what
+it returns is a drawing's data, never a graded answer (docs/students-copy.md);
 :func:`draw_curve` draws it once and returns the artists, and :func:`update_curve` moves those
 artists to a new scene in place, which is what the explorer of
 :mod:`course_lib.widgets.splines` calls on every change. The other functions build the
@@ -63,10 +66,12 @@ def spline_scene(points, kind, end_rule=None, phantoms=None, n_per_segment=32):
     Returns
     -------
     dict
-        ``control`` (m, 2); ``extended`` (the polygon the segments use); ``phantoms`` (0 or 2
-        points); ``segments`` (N, n_per_segment + 1, 2); ``abcd`` (4, 2), the geometry of the
-        last segment; ``end`` = ``(p, p1, p2)`` at its ``t = 1``; ``hull`` (h, 2), the convex hull
-        of the extended polygon (``None`` for Catmull-Rom).
+        Every coordinate and vector rounded to :func:`display_decimals` of the extended
+        polygon. ``control`` (m, 2), the points as given; ``extended`` (the polygon the
+        segments use); ``phantoms`` (0 or 2 points); ``segments`` (N, n_per_segment + 1, 2);
+        ``abcd`` (4, 2), the geometry of the last segment; ``end`` = ``(p, p1, p2)`` at its
+        ``t = 1``; ``hull`` (h, 2), the convex hull of the extended polygon (``None`` for
+        Catmull-Rom).
     """
     P = np.asarray(points, dtype=float)
     if end_rule == "free":
@@ -222,7 +227,7 @@ def plot_blending_functions(ax=None, n=101):
 
     Solid: B-spline (non-negative, sum 1: the convex-hull property); dashed: Catmull-Rom
     (negative lobes for ``a`` and ``d``, and ``b``'s weight is 1 at ``t = 0``: interpolation).
-    Returns the list of lines.
+    Returns the list of lines (their data at 4 decimals).
     """
     if ax is None:
         _, ax = new_figure(size=4.5)
