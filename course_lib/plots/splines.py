@@ -24,11 +24,11 @@ from ..plotting import COLOURS, equal_axes, new_figure
 __all__ = [
     "EXAMPLE_POINTS",
     "compare_splines",
+    "display_decimals",
     "draw_curve",
     "legend_handles",
     "plot_blending_functions",
     "plot_end_rules",
-    "display_decimals",
     "spline_scene",
     "update_curve",
 ]

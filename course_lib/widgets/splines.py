@@ -51,8 +51,8 @@ def combination_tex(weights, names="abcd") -> str:
 
     Weights are read as fractions with small denominators (the Q4 weights are multiples of
     1/6), or given as fractions in text (``"-1/2"``, as :mod:`course_lib.spline_weights`
-    gives them); a common denominator is factored out, and a two-term combination that starts with a
-    minus sign is written the other way round (``c - b`` rather than ``-b + c``).
+    gives them); a common denominator is factored out, and a two-term combination that starts
+    with a minus sign is written the other way round (``c - b`` rather than ``-b + c``).
     """
     fr = [Fraction(w) if isinstance(w, str) else Fraction(float(w)).limit_denominator(120)
           for w in weights]
@@ -81,6 +81,7 @@ def formulas_html(kind: str, rule: str, end=None) -> str:
     p2)`` the current numeric values are appended. One equation per line, indented under its
     heading, so the panel never needs scrolling sideways.
     """
+    general = end_weights_text(kind, "free")   # ValueError for an unknown kind
     names = ("\\mathbf p", "\\mathbf p'", "\\mathbf p''")
 
     def block(heading, rows):
@@ -88,7 +89,7 @@ def formulas_html(kind: str, rule: str, end=None) -> str:
         return f"{heading}<div style='margin-left: 1.5em'>{lines}</div>"
 
     html = [f"<b>{_KIND_TITLE[kind]}</b>, end of the last segment (t = 1):<br>",
-            block("general (Q4(b)):", map(combination_tex, end_weights_text(kind, "free")))]
+            block("general (Q4(b)):", map(combination_tex, general))]
     if rule == "free":
         html.append("phantom point <b>d</b> placed freely: the general rows apply.")
     else:
