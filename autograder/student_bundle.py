@@ -56,6 +56,9 @@ SHIPPED_AS_SOURCE = ("course_lib.answers", "course_lib.variants")
 #: docs/students-copy.md gives the plan that empties this set.
 <<<<<<< HEAD
 <<<<<<< HEAD
+<<<<<<< HEAD
+STILL_SHIPPED: frozenset[str] = frozenset()
+=======
 STILL_SHIPPED: frozenset[str] = frozenset()
 =======
 STILL_SHIPPED: frozenset[str] = frozenset()

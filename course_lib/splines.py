@@ -14,10 +14,13 @@ Whether the curve then *reaches* ``c`` depends on the spline and the rule: Catmu
 does, the B-spline only with ``d = 2c - b`` (with ``d = b`` it stops at ``(b + 2c) / 3``).
 
 Functions of the exercise contract: :func:`catmull_rom_basis`, :func:`bspline_basis`,
-:func:`parameter_row`, :func:`spline_eval`, :func:`end_derivatives`, :func:`phantom_point`,
-:func:`sample_curve`. Beyond the contract: :func:`end_rows`, :func:`end_weights`,
-:func:`extend_with_phantoms`, :func:`segment_geometries`, :func:`evaluate_curve`,
-:func:`convex_hull` and :func:`in_convex_hull`.
+:func:`parameter_row`, :func:`end_rows`, :func:`spline_eval`, :func:`end_derivatives`,
+:func:`phantom_point`, :func:`sample_curve`. Beyond the contract: :func:`basis_matrix`,
+:func:`end_weights`, :func:`extend_with_phantoms`, :func:`segment_geometries`,
+:func:`evaluate_curve`, :func:`convex_hull` and :func:`in_convex_hull`. The students' copy of
+the library holds only the last two (docs/students-copy.md): its figures draw the curves
+through :func:`course_lib.plots.splines.spline_scene`, rounded to display precision, and its
+tables of end weights are :mod:`course_lib.spline_weights`.
 """
 
 from __future__ import annotations
@@ -29,7 +32,7 @@ from ._validate import as_float_array, as_int, as_points
 __all__ = [
     "KINDS",
     "RULES",
-    "basis",
+    "basis_matrix",
     "bspline_basis",
     "catmull_rom_basis",
     "convex_hull",
@@ -50,19 +53,6 @@ __all__ = [
 KINDS = ("catmull-rom", "b-spline")
 #: The end rules of Q4(c): how the phantom point ``d`` is made from ``b`` and ``c``.
 RULES = ("d=b", "d=2c-b", "d=c")
-
-_CATMULL_ROM = 0.5 * np.array(
-    [[-1.0, 3.0, -3.0, 1.0],
-     [2.0, -5.0, 4.0, -1.0],
-     [-1.0, 0.0, 1.0, 0.0],
-     [0.0, 2.0, 0.0, 0.0]]
-)
-_BSPLINE = np.array(
-    [[-1.0, 3.0, -3.0, 1.0],
-     [3.0, -6.0, 3.0, 0.0],
-     [-3.0, 0.0, 3.0, 0.0],
-     [1.0, 4.0, 1.0, 0.0]]
-) / 6.0
 
 
 # --------------------------------------------------------------------------------------------
@@ -92,7 +82,12 @@ def catmull_rom_basis() -> np.ndarray:
     >>> [6, 2, 0, 0] @ catmull_rom_basis()
     array([-1.,  4., -5.,  2.])
     """
-    return _CATMULL_ROM.copy()
+    # written out here, not as a module constant, so that the matrix leaves the students'
+    # wheel with the function (docs/students-copy.md)
+    return 0.5 * np.array([[-1.0, 3.0, -3.0, 1.0],
+                           [2.0, -5.0, 4.0, -1.0],
+                           [-1.0, 0.0, 1.0, 0.0],
+                           [0.0, 2.0, 0.0, 0.0]])
 
 
 def bspline_basis() -> np.ndarray:
@@ -114,10 +109,13 @@ def bspline_basis() -> np.ndarray:
     >>> np.round(6 * ([1, 1, 1, 1] @ bspline_basis()), 12)   # up to round-off
     array([0., 1., 4., 1.])
     """
-    return _BSPLINE.copy()
+    return np.array([[-1.0, 3.0, -3.0, 1.0],
+                     [3.0, -6.0, 3.0, 0.0],
+                     [-3.0, 0.0, 3.0, 0.0],
+                     [1.0, 4.0, 1.0, 0.0]]) / 6.0
 
 
-def basis(kind: str) -> np.ndarray:
+def basis_matrix(kind: str) -> np.ndarray:
     """The basis matrix of ``kind`` (``"catmull-rom"`` or ``"b-spline"``)."""
     kind = _check_kind(kind)
     return catmull_rom_basis() if kind == "catmull-rom" else bspline_basis()
@@ -445,7 +443,7 @@ def evaluate_curve(points, kind: str, u, order: int = 0, end_rule: str | None = 
     ValueError
         For bad points, kind, rule, order, or ``u`` outside ``[0, N]``.
     """
-    M = basis(kind)
+    M = basis_matrix(kind)
     order = _check_order(order)
     Gs = segment_geometries(points, end_rule)
     n_seg = Gs.shape[0]
@@ -497,7 +495,7 @@ def sample_curve(points, kind: str, n_per_segment: int, end_rule: str | None = N
            [1.5, 0.5],
            [2. , 1. ]])
     """
-    M = basis(kind)
+    M = basis_matrix(kind)
     n = as_int(n_per_segment, "n_per_segment", minimum=1)
     Gs = segment_geometries(points, end_rule)
     n_seg = Gs.shape[0]

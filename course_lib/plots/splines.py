@@ -1,6 +1,9 @@
 """Figures for Q4: control polygons, segments, end derivatives and the B-spline's convex hull.
 
-:func:`spline_scene` computes everything a figure of one curve shows (pure NumPy, no drawing);
+:func:`spline_scene` computes everything a figure of one curve shows (pure NumPy, no drawing),
+rounded to display precision, 1e-4 of the points' span (:func:`display_decimals`): the
+students' copy computes it with the course's graded functions compiled into it alone, so what
+it returns is a drawing's data, never a graded answer (docs/students-copy.md);
 :func:`draw_curve` draws it once and returns the artists, and :func:`update_curve` moves those
 artists to a new scene in place, which is what the explorer of
 :mod:`course_lib.widgets.splines` calls on every change. The other functions build the
@@ -21,6 +24,7 @@ from ..plotting import COLOURS, equal_axes, new_figure
 __all__ = [
     "EXAMPLE_POINTS",
     "compare_splines",
+    "display_decimals",
     "draw_curve",
     "legend_handles",
     "plot_blending_functions",
@@ -62,10 +66,12 @@ def spline_scene(points, kind, end_rule=None, phantoms=None, n_per_segment=32):
     Returns
     -------
     dict
-        ``control`` (m, 2); ``extended`` (the polygon the segments use); ``phantoms`` (0 or 2
-        points); ``segments`` (N, n_per_segment + 1, 2); ``abcd`` (4, 2), the geometry of the
-        last segment; ``end`` = ``(p, p1, p2)`` at its ``t = 1``; ``hull`` (h, 2), the convex hull
-        of the extended polygon (``None`` for Catmull-Rom).
+        Every coordinate and vector rounded to :func:`display_decimals` of the extended
+        polygon. ``control`` (m, 2), the points as given; ``extended`` (the polygon the
+        segments use); ``phantoms`` (0 or 2 points); ``segments`` (N, n_per_segment + 1, 2);
+        ``abcd`` (4, 2), the geometry of the last segment; ``end`` = ``(p, p1, p2)`` at its
+        ``t = 1``; ``hull`` (h, 2), the convex hull of the extended polygon (``None`` for
+        Catmull-Rom).
     """
     P = np.asarray(points, dtype=float)
     if end_rule == "free":
@@ -75,19 +81,32 @@ def spline_scene(points, kind, end_rule=None, phantoms=None, n_per_segment=32):
         ext = np.vstack([ph[0], P, ph[1]])
     elif end_rule is None:
         ext = P
-        ph = np.empty((0, 2))
     else:
         ext = splines.extend_with_phantoms(P, end_rule)
-        ph = ext[[0, -1]]
-    M = splines.basis(kind)
+    M = splines.basis_matrix(kind)
     Gs = splines.segment_geometries(ext)
     t = np.linspace(0.0, 1.0, n_per_segment + 1)
-    rows = splines.parameter_row(t) @ M
-    segments = np.einsum("sj,ijk->isk", rows, Gs)
-    end = splines.end_derivatives(M, *Gs[-1])
+    segments = np.einsum("sj,ijk->isk", splines.parameter_row(t) @ M, Gs)
+    a, b, c, d = Gs[-1]
+    end = splines.end_derivatives(M, a, b, c, d)
+    # what is drawn and read out, at display precision (docs/students-copy.md)
+    decimals = display_decimals(ext)
+    ext = np.round(ext, decimals)
+    ph = ext[[0, -1]] if end_rule is not None else np.empty((0, 2))
     hull = splines.convex_hull(ext) if kind == "b-spline" else None
     return {"kind": kind, "end_rule": end_rule, "control": P, "extended": ext, "phantoms": ph,
-            "segments": segments, "abcd": Gs[-1], "end": end, "hull": hull}
+            "segments": np.round(segments, decimals), "abcd": ext[-4:],
+            "end": tuple(np.round(v, decimals) for v in end), "hull": hull}
+
+
+def display_decimals(points) -> int:
+    """Decimals that round a figure's coordinates to about 1e-4 of the span of ``points``
+    (its largest extent along an axis): far finer than a pixel, far coarser than the 1e-6 a
+    grader compares at."""
+    span = float(np.max(np.ptp(np.asarray(points, dtype=float), axis=0), initial=0.0))
+    if not np.isfinite(span) or span <= 0.0:
+        span = 1.0
+    return int(4 - np.floor(np.log10(span)))
 
 
 def draw_curve(scene, ax=None, *, show_hull=True, show_end=True, show_labels=True,
@@ -208,14 +227,15 @@ def plot_blending_functions(ax=None, n=101):
 
     Solid: B-spline (non-negative, sum 1: the convex-hull property); dashed: Catmull-Rom
     (negative lobes for ``a`` and ``d``, and ``b``'s weight is 1 at ``t = 0``: interpolation).
-    Returns the list of lines.
+    Returns the list of lines (their data at 4 decimals).
     """
     if ax is None:
         _, ax = new_figure(size=4.5)
     t = np.linspace(0.0, 1.0, n)
     lines = []
     for kind, style in (("b-spline", "-"), ("catmull-rom", "--")):
-        W = splines.parameter_row(t) @ splines.basis(kind)
+        # weights between -0.1 and 1: rounded to display precision
+        W = np.round(splines.parameter_row(t) @ splines.basis_matrix(kind), 4)
         for j, name in enumerate("abcd"):
             lines += ax.plot(t, W[:, j], style, color=_WEIGHT_COLOURS[j], lw=2,
                              marker=_WEIGHT_MARKERS[j], markevery=max(1, (n - 1) // 5), ms=4,

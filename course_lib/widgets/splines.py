@@ -27,8 +27,8 @@ import ipywidgets as W
 import matplotlib.pyplot as plt
 import numpy as np
 
-from .. import splines
 from ..plots.splines import EXAMPLE_POINTS, draw_curve, spline_scene, update_curve
+from ..spline_weights import end_weights_text
 from ._slider_echoes import MOVE, STALE, SliderEchoes
 from ._view import FigureExplorer, one_at_a_time
 from ..plotting import new_figure
@@ -50,10 +50,12 @@ def combination_tex(weights, names="abcd") -> str:
     ``\\tfrac{1}{6}(\\mathbf b + 4\\mathbf c + \\mathbf d)``.
 
     Weights are read as fractions with small denominators (the Q4 weights are multiples of
-    1/6); a common denominator is factored out, and a two-term combination that starts with a
-    minus sign is written the other way round (``c - b`` rather than ``-b + c``).
+    1/6), or given as fractions in text (``"-1/2"``, as :mod:`course_lib.spline_weights`
+    gives them); a common denominator is factored out, and a two-term combination that starts
+    with a minus sign is written the other way round (``c - b`` rather than ``-b + c``).
     """
-    fr = [Fraction(float(w)).limit_denominator(120) for w in weights]
+    fr = [Fraction(w) if isinstance(w, str) else Fraction(float(w)).limit_denominator(120)
+          for w in weights]
     terms = [(f, n) for f, n in zip(fr, names) if f != 0]
     if not terms:
         return r"\mathbf 0"
@@ -79,7 +81,7 @@ def formulas_html(kind: str, rule: str, end=None) -> str:
     p2)`` the current numeric values are appended. One equation per line, indented under its
     heading, so the panel never needs scrolling sideways.
     """
-    M = splines.basis(kind)
+    general = end_weights_text(kind, "free")   # ValueError for an unknown kind
     names = ("\\mathbf p", "\\mathbf p'", "\\mathbf p''")
 
     def block(heading, rows):
@@ -87,12 +89,12 @@ def formulas_html(kind: str, rule: str, end=None) -> str:
         return f"{heading}<div style='margin-left: 1.5em'>{lines}</div>"
 
     html = [f"<b>{_KIND_TITLE[kind]}</b>, end of the last segment (t = 1):<br>",
-            block("general (Q4(b)):", map(combination_tex, splines.end_weights(M, "free")))]
+            block("general (Q4(b)):", map(combination_tex, general))]
     if rule == "free":
         html.append("phantom point <b>d</b> placed freely: the general rows apply.")
     else:
         html.append(block(f"with ${_RULE_TEX[rule]}$:",
-                          map(combination_tex, splines.end_weights(M, rule))))
+                          map(combination_tex, end_weights_text(kind, rule))))
     if end is not None:
         html.append(block("here:", (f"({v[0]:.2f},\\ {v[1]:.2f})" for v in end)))
     return "".join(html)
@@ -136,7 +138,7 @@ class SplineEndExplorer(FigureExplorer):
             raise ValueError(f"points must have shape (m, 2) with m >= 2, "
                              f"got shape {self.points.shape}")
         self.n_per_segment = int(n_per_segment)
-        self.phantoms = splines.extend_with_phantoms(self.points, "d=2c-b")[[0, -1]]
+        self.phantoms = self._rule_phantoms(kind, "d=2c-b")
         self._drag = None
         self._syncing = False
         self._echoes = SliderEchoes()
@@ -193,6 +195,10 @@ class SplineEndExplorer(FigureExplorer):
         return spline_scene(self.points, self.kind.value, self.rule.value,
                             phantoms=self.phantoms, n_per_segment=self.n_per_segment)
 
+    def _rule_phantoms(self, kind, rule):
+        """The two phantom points ``rule`` makes for the current points (as drawn)."""
+        return spline_scene(self.points, kind, rule, n_per_segment=1)["phantoms"].copy()
+
     @one_at_a_time
     def update(self):
         """Recompute the curve and move the artists in place; refresh the formulas."""
@@ -242,7 +248,7 @@ class SplineEndExplorer(FigureExplorer):
         old, new = change["old"], change["new"]
         if new == "free" and old != "free":
             # the free phantoms start where the previous rule had put them
-            self.phantoms = splines.extend_with_phantoms(self.points, old)[[0, -1]]
+            self.phantoms = self._rule_phantoms(self.kind.value, old)
         keep = self.point.value
         self._syncing = True
         self.point.options = self._point_options(new)

@@ -479,7 +479,7 @@ def test_registry_catches_common_mistakes():
     def doubled(points, kind, n, end_rule=None):
         ext = np.asarray(points, float) if end_rule is None else \
             S.extend_with_phantoms(points, end_rule)
-        return np.vstack([S.spline_eval(S.basis(kind), G, np.linspace(0, 1, n + 1))
+        return np.vstack([S.spline_eval(S.basis_matrix(kind), G, np.linspace(0, 1, n + 1))
                           for G in S.segment_geometries(ext)])
     assert _fails("sample_curve", doubled)
     # the mirror rule at the start applied the wrong way round

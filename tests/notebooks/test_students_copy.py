@@ -212,6 +212,7 @@ def test_students_q6_figures_are_the_instructors(tmp_path):
     instructors' shows, number for number and word for word, and the graded functions, the
     clipping machinery and ``course_lib._polygons`` are absent."""
 Q5_IN_STUDENT_ENV = r'''
+Q4_IN_STUDENT_ENV = r'''
 import pickle, sys
 import numpy as np
 import matplotlib
@@ -286,6 +287,27 @@ with open(sys.argv[1], "wb") as f:
                  "profile": pg.profile_curves(1.0, 40.0, 1000.0),
                  "curves": pg.model_curves(holes, 1.0, 40.0, np.linspace(50.0, 3000.0, 24), 50.0),
                  "readout": ex.readout.value, "results": ex.results}, f)
+from course_lib import spline_weights, splines
+from course_lib.plots import splines as plots
+from course_lib.widgets.splines import SplineEndExplorer, formulas_html
+gone = [n for n in ("catmull_rom_basis", "bspline_basis", "parameter_row", "end_rows",
+                    "end_derivatives", "phantom_point", "spline_eval", "sample_curve",
+                    "basis_matrix", "end_weights", "extend_with_phantoms", "segment_geometries",
+                    "evaluate_curve") if hasattr(splines, n)]
+arrays = [(m.__name__, k) for m in (splines, plots) for k, v in vars(m).items()
+          if isinstance(v, np.ndarray) and v.shape == (4, 4)]
+P = np.array(sys.argv[2:], dtype=float).reshape(-1, 2)
+scenes = {(kind, rule): plots.spline_scene(P, kind, rule, phantoms=P[:2], n_per_segment=8)
+          for kind in splines.KINDS for rule in (None, "d=b", "d=2c-b", "d=c", "free")}
+lines = [ln.get_ydata() for ln in plots.plot_blending_functions()]
+ex = SplineEndExplorer(P, kind="b-spline", rule="d=c")
+ex.rule.value = "free"
+with open(sys.argv[1], "wb") as f:
+    pickle.dump({"gone": gone, "arrays": arrays, "scenes": scenes, "lines": lines,
+                 "tables": {c: spline_weights.end_weights_text(*c) for c in
+                            [(k, r) for k in spline_weights.KINDS for r in spline_weights.RULES]},
+                 "formulas": formulas_html("catmull-rom", "d=b", ex.scene["end"]),
+                 "explorer": (ex.phantoms, ex.scene["end"])}, f)
 '''
 
 
@@ -296,6 +318,10 @@ def test_students_q2_figures_are_the_instructors(tmp_path):
     copy (the references inlined as C functions), the shipped results are the references' bit
     for bit, the explorer reads out the same text, and the graded functions and their helpers
     are absent from ``course_lib.gamma_camera``."""
+def test_students_q4_figures_are_the_instructors(tmp_path):
+    """In the students' environment: q4's curves, ends, blending functions and weight tables are
+    the instructors' ones (figures at display precision, 1e-4 of the points' span), while the
+    graded functions, their helpers and any 4 x 4 basis matrix are absent from the modules."""
     if shutil.which("gcc") is None:
         pytest.skip("no C compiler (make wheel-deps)")
     import pickle
@@ -406,3 +432,37 @@ def test_students_q2_figures_are_the_instructors(tmp_path):
         assert got["readout"] == ours.readout.value
     finally:
         plt.close(ours.fig)
+    from course_lib import spline_weights
+    from course_lib import splines as S
+    from course_lib.plots import splines as plots
+    from course_lib.widgets.splines import formulas_html
+
+    P = np.random.default_rng(4).normal(scale=3.0, size=(6, 2)).round(6)
+    out = tmp_path / "q4.pkl"
+    proc = studentenv.run(Q4_IN_STUDENT_ENV, str(out), *map(repr, P.ravel().tolist()),
+                          cwd=tmp_path, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    got = pickle.loads(out.read_bytes())
+    assert got["gone"] == [] and got["arrays"] == []
+    for (kind, rule), scene in got["scenes"].items():
+        quantum = 10.0 ** -plots.display_decimals(scene["extended"])
+        ext = (np.vstack([P[0], P, P[1]]) if rule == "free" else
+               P if rule is None else S.extend_with_phantoms(P, rule))
+        M = S.basis_matrix(kind)
+        t = np.linspace(0.0, 1.0, 9)
+        want = {"extended": ext,
+                "segments": [S.spline_eval(M, G, t) for G in S.segment_geometries(ext)],
+                "end": S.end_derivatives(M, *ext[-4:])}
+        for name, ref in want.items():
+            np.testing.assert_allclose(np.asarray(scene[name]), np.asarray(ref), rtol=0,
+                                       atol=0.5 * quantum * (1 + 1e-9), err_msg=str((kind, rule, name)))
+    t = np.linspace(0.0, 1.0, 101)
+    ref = [w for kind in ("b-spline", "catmull-rom")
+           for w in (S.parameter_row(t) @ S.basis_matrix(kind)).T]
+    np.testing.assert_allclose(got["lines"], ref, rtol=0, atol=0.5e-4 + 1e-12)
+    assert got["tables"] == {c: spline_weights.end_weights_text(*c) for c in got["tables"]}
+    assert got["formulas"].startswith(formulas_html("catmull-rom", "d=b"))
+    phantoms, end = got["explorer"]
+    quantum = 10.0 ** -plots.display_decimals(np.vstack([phantoms, P]))
+    np.testing.assert_allclose(phantoms, [P[0], P[-1]], rtol=0, atol=0.5 * quantum)
+    np.testing.assert_allclose(end[0], (P[-2] + 5 * P[-1]) / 6, rtol=0, atol=0.5 * quantum)
