@@ -66,14 +66,16 @@ STILL_SHIPPED = frozenset({
 LEFT_OUT_HELPERS = {
     "course_lib.marching_cubes": (
         "_check_volume", "_active_cells", "_march", "_axis_vertices", "marching_cubes_loop",
-        "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation"),
+        "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation",
+        "cube_symmetries", "_apply", "_orbit_labels", "_cycle_lengths"),   # Q3(b)'s orbits
 }
 #: modules the students' wheel does not carry at all (nothing of the students' copy needs
 #: them; no shipped module may import them)
 INSTRUCTORS_ONLY = ("course_lib.mesh",)
 #: modules whose students' copy is generated when the wheel is built: the text their
 #: ``students_copy()`` returns (e.g. the results of the references on a figure's fixed inputs)
-GENERATED_MODULES = ("course_lib._mc_results_data",)
+GENERATED_MODULES = ("course_lib._mc_results_data",
+                     "course_lib._mc_tables", "course_lib._mc_case_data")  # no ALT table, no orbits
 #: the instructors' requirements a student's environment needs (versions come from our own
 #: package metadata, so the two never disagree)
 STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "anywidget", "jupyterlab",

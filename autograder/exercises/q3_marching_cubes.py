@@ -280,10 +280,16 @@ def _orbit_cases(rng):
 
 
 def _ambiguous_indices(rng):
-    """A random member of each of the six face-ambiguous classes (rotations and complement)."""
+    """A random member of each of the six face-ambiguous classes (rotations and complement),
+    never the representative whose alternative the notebook's figure and explorer draw
+    (``course_lib._mc_case_data.SHOWN_INDICES``: shipped, so it would answer the case)."""
+    from course_lib._mc_case_data import SHOWN_INDICES
+
     for case in mc.BASE_CASES:
         if case.ambiguous:
-            yield int(rng.choice(mc.symmetry_orbit(case.index, complement=True)))
+            orbit = [i for i in mc.symmetry_orbit(case.index, complement=True).tolist()
+                     if i not in SHOWN_INDICES]
+            yield int(rng.choice(orbit))
 
 
 def _alternative_cases(rng):
