@@ -41,6 +41,7 @@ from pathlib import Path
 from packaging.requirements import Requirement
 
 from .course import REPO_ROOT, file_lock
+from .inlining import inline_into
 
 LIBRARY = "course_lib"
 LIBRARY_DIR = REPO_ROOT / LIBRARY
@@ -69,6 +70,12 @@ LEFT_OUT_HELPERS = {
         "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation",
         "cube_symmetries", "_apply", "_orbit_labels", "_cycle_lengths"),   # Q3(b)'s orbits
 }
+#: shipped routines that compute with left-out functions yet answer no graded question: each
+#: returns only a whole figure, an 8-bit image, text, or numbers at display precision, and
+#: stores nothing finer on an object. The students' copy of each calls C-level copies of the
+#: left-out functions it calls, which nothing else can reach (:mod:`autograder.inlining`);
+#: ``{module: (qualified name, ...)}``, methods as ``Class.method``
+INLINE_INTO: dict[str, tuple[str, ...]] = {}
 #: modules the students' wheel does not carry at all (nothing of the students' copy needs
 #: them; no shipped module may import them)
 INSTRUCTORS_ONLY = ("course_lib.mesh",)
@@ -81,6 +88,7 @@ GENERATED_MODULES = ("course_lib._mc_results_data",
 STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "anywidget", "jupyterlab",
                         "nbgrader")
 SETUP_SCRIPT = Path(__file__).with_name("student_setup.py")
+INLINING_SCRIPT = Path(__file__).with_name("inlining.py")
 #: nbgrader's instructor tools: off in ``make lab``'s student view and, through the wheel's
 #: Jupyter config files (:func:`student_jupyter_config`), wherever the wheel is installed
 STUDENT_DISABLED_PLUGINS = (
@@ -211,7 +219,9 @@ def imported_modules(text: str, module: str) -> set[str]:
 
 
 def names_used(text: str) -> set[str]:
-    """Every name a module's source uses: names, attributes, imported names, whole strings."""
+    """Every name a module's source uses: names, attributes, imported names, and strings
+    that can name an attribute (a call's argument, as in ``getattr(m, "f")``, or an entry of
+    ``__all__``; a dictionary key "phong" names nothing)."""
     used = set()
     for node in ast.walk(ast.parse(text)):
         if isinstance(node, ast.Name):
@@ -220,8 +230,13 @@ def names_used(text: str) -> set[str]:
             used.add(node.attr)
         elif isinstance(node, ast.alias):
             used.add(node.name.rpartition(".")[2])
-        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
-            used.add(node.value)
+        elif isinstance(node, ast.Call):
+            used.update(a.value for a in node.args
+                        if isinstance(a, ast.Constant) and isinstance(a.value, str))
+        elif (isinstance(node, ast.Assign) and len(node.targets) == 1
+              and getattr(node.targets[0], "id", None) == "__all__"):
+            used.update(n.value for n in ast.walk(node.value)
+                        if isinstance(n, ast.Constant) and isinstance(n.value, str))
     return used
 
 
@@ -275,7 +290,9 @@ def sources_digest() -> str:
     for rel in library_files():
         h.update(str(rel).encode() + b"\0" + (REPO_ROOT / rel).read_bytes() + b"\0")
     h.update(SETUP_SCRIPT.read_bytes())
-    h.update(json.dumps([course_version(), bundle_spec(), left_out(), INSTRUCTORS_ONLY,
+    h.update(INLINING_SCRIPT.read_bytes())
+    h.update(json.dumps([course_version(), bundle_spec(), left_out(), INLINE_INTO,
+                         INSTRUCTORS_ONLY,
                          GENERATED_MODULES, np_version(),
                          student_jupyter_config(),
                          pyproject_text("0"), student_readme(),
@@ -324,6 +341,9 @@ def staged_text(rel: Path, withheld: dict, gone: set) -> str:
         text = importlib.import_module(name).students_copy()
     else:
         text = (REPO_ROOT / rel).read_text(encoding="utf-8")
+    if name in INLINE_INTO:
+        text = inline_into(text, name, INLINE_INTO[name], withheld, _library_source,
+                           _is_library_module)
     if name in withheld:
         text = without_functions(text, withheld[name])
     # a left-out function that shares its name with a module of the library (marching_cubes)
@@ -337,6 +357,16 @@ def staged_text(rel: Path, withheld: dict, gone: set) -> str:
     if imported:
         raise ValueError(f"{rel} imports {imported}, which the students' wheel leaves out")
     return text
+
+
+def _library_source(module: str) -> str:
+    """The instructors' source of library module ``module`` (what left-out functions are
+    copied from)."""
+    return (REPO_ROOT / (module.replace(".", "/") + ".py")).read_text(encoding="utf-8")
+
+
+def _is_library_module(dotted: str) -> bool:
+    return dotted in {module_name(p) for p in library_files()}
 
 
 def stage_sources(stage: Path, digest: str) -> Path:
