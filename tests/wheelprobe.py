@@ -218,7 +218,8 @@ def _screen_data(label, value, counts):
         if exercise not in INDEXED or isinstance(value, (str, bytes)):
             continue
         _, indices = INDEXED[exercise]
-        size = None if isinstance(value, dict) or np.ndim(value) == 0 else len(value)
+        size = (None if isinstance(value, dict) or (isinstance(value, np.ndarray) and value.ndim == 0)
+                else len(value))
         for n_label, n in [(None, None)] + counts:
             if n is not None and (n is value or size is None or len(n) != size):
                 continue
@@ -308,13 +309,17 @@ for module in modules:
 
 seconds["objects"] = time.monotonic() - started
 started = time.monotonic()
+unscreened = []
 for label, v in data:
-    _screen_data(label, v, counts)
+    try:
+        _screen_data(label, v, counts)
+    except Exception as exc:            # reported, so that a blind spot is seen
+        unscreened.append(f"{label}: {exc!r}"[:200])
 seconds["data"] = time.monotonic() - started
 with open(out_path, "wb") as f:
     pickle.dump({"found": found, "broken": broken, "modules": [m.__name__ for m in modules],
                  "callables": len(seen), "calls": tried, "tables": len(data),
-                 "objects": objects, "seconds": seconds}, f)
+                 "objects": objects, "seconds": seconds, "unscreened": unscreened}, f)
 sys.stdout.flush()
 os._exit(0)
 '''
@@ -376,7 +381,7 @@ def find_answers(python: str | Path, workdir: Path, env: dict | None = None,
                 answers.setdefault(name, []).append(qual)
     return {"answers": {k: sorted(v) for k, v in sorted(answers.items())},
             **{k: raw[k] for k in ("broken", "modules", "callables", "calls", "tables",
-                                   "objects", "seconds")}}
+                                   "objects", "seconds", "unscreened")}}
 
 
 def _matches(ex, row, got) -> bool:

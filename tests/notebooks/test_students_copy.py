@@ -107,7 +107,7 @@ def test_probe_flags_a_triangle_table_and_what_an_explorer_keeps(tmp_path):
         (tmp_path / "copy" / rel).write_text(textwrap.dedent(text))
     result = wheelprobe.find_answers(sys.executable, tmp_path / "work", package="forged_tables",
                                      path=(str(tmp_path / "copy"),))
-    assert result["broken"] == {}
+    assert result["broken"] == {} and result["unscreened"] == []
     assert result["objects"] == 3                        # Explorer(), Readout(), forged_explorer()
     answers = result["answers"]
     assert answers.pop("alternative_triangulation") == [
@@ -152,6 +152,7 @@ def wheel_answers(tmp_path_factory):
     result = wheelprobe.find_answers(studentenv.python(), tmp_path_factory.mktemp("probe"),
                                      env=studentenv.env_vars())
     assert result["broken"] == {}, result["broken"]
+    assert result["unscreened"] == [], result["unscreened"]
     return result
 
 
