@@ -157,6 +157,7 @@ def wheel_answers(tmp_path_factory):
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1800)      # the wheel's build (cached) and the probe, objects and tables
 @pytest.mark.xdist_group("student_env")
 def test_students_wheel_answers_only_what_its_explorers_still_need(wheel_answers):
     """No callable of the wheel answers a left-out graded function; the ones it still answers
