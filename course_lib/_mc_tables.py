@@ -17,6 +17,14 @@ triangulated as a fan. The alternative table :data:`ALT_TRI_TABLE` uses the oppo
 ambiguous faces (inside corners joined): it is what Lorensen's original use of complement
 symmetry produces, and mixing the two tables is what opens the holes of Q3(c).
 
+The students' copy
+------------------
+The students' wheel holds the tables a student's ``marching_cubes`` uses (:data:`CORNERS`,
+:data:`EDGES`, :data:`FACES`, :data:`TRI_TABLE`, :data:`N_TRIANGLES`, :data:`EDGE_TABLE`) and
+:func:`ambiguous_faces`, as literals made when the wheel is built (:func:`students_copy`), and
+not the generator: :func:`case_triangles` with ``alternative=True`` and :data:`ALT_TRI_TABLE`
+are Q3(c)'s ``alternative_triangulation`` (docs/students-copy.md).
+
 Faces are wound counter-clockwise seen from the outside (values above the iso-level), so their
 normals point up the gradient of the data, away from the inside region: a blob of low values
 (for example ``|x - c|**2 < r**2``) gets a positive enclosed volume from
@@ -24,6 +32,8 @@ normals point up the gradient of the data, away from the inside region: a blob o
 """
 
 from __future__ import annotations
+
+import inspect
 
 import numpy as np
 
@@ -186,3 +196,34 @@ EDGE_TABLE = np.array([sum(1 << e for e in range(12)
                            if _bits(i)[EDGES[e, 0]] != _bits(i)[EDGES[e, 1]])
                        for i in range(256)], dtype=np.int64)
 
+
+
+#: what the students' copy holds: the tables a march uses, not the generator nor the
+#: alternative table (Q3(c)'s graded answer)
+STUDENTS_TABLES = ("CORNERS", "EDGES", "FACES", "TRI_TABLE", "N_TRIANGLES", "EDGE_TABLE")
+
+STUDENTS_COPY = '''"""The marching-cubes lookup tables (Q3(a)), made by the course's generator when this
+copy of the library was built: corner, edge and face numbering, the triangles of each of the 256
+cases (inside corners kept apart on every ambiguous face) and the crossed edges of each case."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["CORNERS", "EDGES", "EDGE_TABLE", "FACES", "N_TRIANGLES", "TRI_TABLE",
+           "ambiguous_faces"]
+
+%s
+
+%s
+'''
+
+
+def students_copy() -> str:
+    """The text of this module in the students' wheel: the arrays of :data:`STUDENTS_TABLES`
+    as literals (equal to this module's) and :func:`ambiguous_faces`, nothing that generates
+    a table."""
+    arrays = "\n".join(f"{name} = np.array({globals()[name].tolist()!r}, dtype=np.int64)"
+                       for name in STUDENTS_TABLES)
+    functions = "\n\n".join(inspect.getsource(f) for f in (ambiguous_faces, _bits))
+    return STUDENTS_COPY % (arrays, functions)

@@ -25,21 +25,23 @@ set when corner ``i`` is inside (:func:`cube_index`).
 
 How the tables are made
 -----------------------
-The 256-entry tables (:data:`TRI_TABLE`, :data:`ALT_TRI_TABLE`, :data:`EDGE_TABLE`) are
+The 256-entry tables (:data:`TRI_TABLE`, ``_mc_tables.ALT_TRI_TABLE``, :data:`EDGE_TABLE`) are
 generated, not typed in, by :mod:`course_lib._mc_tables` (which says how), and imported from
 here; every mesh built from :data:`TRI_TABLE` is watertight, and mixing it with
-:data:`ALT_TRI_TABLE` opens the holes of Q3(c). Their faces are wound so that normals point up
+the alternative table opens the holes of Q3(c). Their faces are wound so that normals point up
 the gradient of the data, away from the inside: a blob of low values gets a positive enclosed
 volume from :func:`course_lib.mesh.mesh_volume` (Q3(d)).
 
 The students' copy
 ------------------
-Students' wheel holds the tables, the symmetry classes and :func:`closes_up` (the visible test
-of Q3(c)), not the graded functions nor anything that marches a volume (:func:`cube_index`,
-:func:`interpolate_edge`, :func:`marching_cubes`, :func:`marching_cubes_loop`,
-:func:`cell_triangles`, :func:`hole_demo`, :func:`probe_triangulation`); its figures read the
-references' results on their fixed inputs from :mod:`course_lib.mc_results`
-(docs/students-copy.md).
+Students' wheel holds the tables a march uses (not :data:`~course_lib._mc_tables.ALT_TRI_TABLE`),
+:func:`case_of` (a table made at wheel build, :mod:`course_lib._mc_case_data`) and
+:func:`closes_up` (the visible test of Q3(c)); not the graded functions, nor the cube's symmetry
+group (:func:`cube_symmetries`, which gives Q3(b)'s orbits), nor anything that marches a volume
+(:func:`cube_index`, :func:`interpolate_edge`, :func:`marching_cubes`,
+:func:`marching_cubes_loop`, :func:`cell_triangles`, :func:`hole_demo`,
+:func:`probe_triangulation`); its figures read the references' results on their fixed inputs
+from :mod:`course_lib.mc_results` (docs/students-copy.md).
 """
 
 from __future__ import annotations
@@ -51,12 +53,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._mc_tables import (ALT_N_TRIANGLES, ALT_TRI_TABLE, CORNERS, EDGE_TABLE, EDGES, FACES,
-                         N_TRIANGLES, TRI_TABLE, ambiguous_faces, case_triangles)
+from . import _mc_case_data, _mc_tables
+from ._mc_tables import CORNERS, EDGE_TABLE, EDGES, FACES, N_TRIANGLES, TRI_TABLE, ambiguous_faces
 from ._validate import as_float_array, as_int, as_positive, as_scalar, as_vectors
 
 __all__ = [
-    "ALT_TRI_TABLE",
     "AMBIGUOUS_CASES",
     "BASE_CASES",
     "CORNERS",
@@ -69,7 +70,6 @@ __all__ = [
     "alternative_triangulation",
     "ambiguous_faces",
     "case_of",
-    "case_triangles",
     "cell_triangles",
     "closes_up",
     "count_symmetry_classes",
@@ -284,13 +284,11 @@ AMBIGUOUS_CASES = tuple(c.number for c in BASE_CASES if c.ambiguous)
 
 
 def case_of(index: int) -> int:
-    """Lorensen's case number (0 ... 14) of case index ``index`` (rotations + complement)."""
-    labels = _orbit_labels(True, False)
-    target = labels[int(index)]
-    for c in BASE_CASES:
-        if labels[c.index] == target:
-            return c.number
-    raise AssertionError("unreachable: the base cases cover every class")  # pragma: no cover
+    """Lorensen's case number (0 ... 14) of case index ``index`` (rotations + complement).
+
+    Read from a 256-entry table that the symmetry classes make (:mod:`course_lib._mc_case_data`;
+    in the students' copy, literals made when the wheel was built)."""
+    return _mc_case_data.case_labels()[_case_index(index)]
 
 
 # --------------------------------------------------------------------------------------------
@@ -714,7 +712,7 @@ def cell_triangles(values, iso, alternative: bool = False) -> np.ndarray:
     """The triangles of one unit cell as coordinates, shape ``(t, 3, 3)``.
 
     ``values`` are the eight corner values (corner order of this module); the case comes from
-    :func:`cube_index`, the triangles from :data:`TRI_TABLE` (or :data:`ALT_TRI_TABLE`), and
+    :func:`cube_index`, the triangles from :data:`TRI_TABLE` (or the alternative table), and
     each vertex is interpolated along its edge (:func:`interpolate_edge`). The tests check the
     case figures' own triangles (:func:`course_lib.plots.marching_cubes.drawn_triangles`) against
     it; like the march, it is not in the students' copy.
@@ -723,7 +721,8 @@ def cell_triangles(values, iso, alternative: bool = False) -> np.ndarray:
     if values.shape != (8,):
         raise ValueError(f"values must have shape (8,), got shape {values.shape}")
     case = cube_index(values, iso)
-    table, ntri = (ALT_TRI_TABLE, ALT_N_TRIANGLES) if alternative else (TRI_TABLE, N_TRIANGLES)
+    table, ntri = ((_mc_tables.ALT_TRI_TABLE, _mc_tables.ALT_N_TRIANGLES) if alternative
+                   else (TRI_TABLE, N_TRIANGLES))
     edges = table[case, :ntri[case]]                                    # (t, 3)
     a, b = EDGES[edges, 0], EDGES[edges, 1]
     v0, v1 = values[a], values[b]
@@ -763,7 +762,8 @@ def hole_demo(alternative: bool = True):
     joined = {(1, 1, 1)} if alternative else set()
 
     def triangles_of_cell(cell, case):
-        table, ntri = (ALT_TRI_TABLE, ALT_N_TRIANGLES) if cell in joined else (TRI_TABLE, N_TRIANGLES)
+        table, ntri = ((_mc_tables.ALT_TRI_TABLE, _mc_tables.ALT_N_TRIANGLES) if cell in joined
+                       else (TRI_TABLE, N_TRIANGLES))
         return table[case, :ntri[case]]
 
     verts, faces = _march_loop(volume, 0.5, np.ones(3), triangles_of_cell)
@@ -786,7 +786,7 @@ def alternative_triangulation(index) -> np.ndarray:
         outside, in which every ambiguous face *joins* its two inside corners (the table
         :data:`TRI_TABLE` keeps them apart). Each closed loop of ``n`` crossed edges is cut into
         ``n - 2`` triangles, none lying flat in a face of the cube. The row of
-        :data:`ALT_TRI_TABLE`.
+        ``_mc_tables.ALT_TRI_TABLE``.
 
     Raises
     ------
@@ -809,7 +809,7 @@ def alternative_triangulation(index) -> np.ndarray:
     index = _case_index(index)
     if not ambiguous_faces(index):
         raise ValueError(f"case {index} has no ambiguous face: it has only one triangulation")
-    return ALT_TRI_TABLE[index, :ALT_N_TRIANGLES[index]].copy()
+    return _mc_tables.ALT_TRI_TABLE[index, :_mc_tables.ALT_N_TRIANGLES[index]].copy()
 
 
 def probe_triangulation(index, triangles):
@@ -818,7 +818,7 @@ def probe_triangulation(index, triangles):
     A 4 x 4 x 4 volume of outside samples (value 1) whose central cell, ``(1, 1, 1)`` to
     ``(2, 2, 2)``, has the inside corners (value 0) of case ``index``; iso-level 0.5. The central
     cell is triangulated with ``triangles`` (rows of edge numbers) and every other cell with
-    :data:`ALT_TRI_TABLE`: each ambiguous face of the central cell is shared with a neighbour
+    ``_mc_tables.ALT_TRI_TABLE``: each ambiguous face of the central cell is shared with a neighbour
     that joins its inside corners, and no other cell has an ambiguous face. So the mesh is closed
     and consistently wound exactly when ``triangles`` joins the inside corners on every
     ambiguous face and is wound like its neighbours.
@@ -851,7 +851,7 @@ def probe_triangulation(index, triangles):
     def triangles_of_cell(cell, case):
         if cell == (1, 1, 1):
             return triangles
-        return ALT_TRI_TABLE[case, :ALT_N_TRIANGLES[case]]
+        return _mc_tables.ALT_TRI_TABLE[case, :_mc_tables.ALT_N_TRIANGLES[case]]
 
     return _march_loop(volume, 0.5, np.ones(3), triangles_of_cell)
 
@@ -892,9 +892,15 @@ def closes_up(index, triangles) -> bool:
     ValueError
         As :func:`probe_triangulation`.
 
+    Notes
+    -----
+    A neighbour with an ambiguous face joins its inside corners as the table keeps apart those
+    of its complement: its triangles are the complement's row of :data:`TRI_TABLE`, each
+    reversed (any triangulation of the same contour loops gives the same verdict).
+
     Examples
     --------
-    >>> closes_up(5, ALT_TRI_TABLE[5, :ALT_N_TRIANGLES[5]])      # the joined band
+    >>> closes_up(5, TRI_TABLE[250, :N_TRIANGLES[250], ::-1])    # the joined band
     True
     >>> closes_up(5, TRI_TABLE[5, :N_TRIANGLES[5]])              # kept apart: a hole each side
     False
@@ -906,8 +912,12 @@ def closes_up(index, triangles) -> bool:
     for cell in itertools.product(range(3), repeat=3):
         corners = [tuple(np.add(cell, p)) for p in CORNERS]
         case = sum(1 << c for c, p in enumerate(corners) if p in inside)
-        rows = (triangles if cell == (1, 1, 1)
-                else ALT_TRI_TABLE[case, :ALT_N_TRIANGLES[case]])
+        if cell == (1, 1, 1):
+            rows = triangles
+        elif ambiguous_faces(case):
+            rows = TRI_TABLE[255 - case, :N_TRIANGLES[255 - case], ::-1]
+        else:
+            rows = TRI_TABLE[case, :N_TRIANGLES[case]]
         for tri in rows.tolist():
             # a crossing point is its grid edge: the edge's first sample and its axis
             keys = [(corners[EDGES[e, 0]], int(_EDGE_AXIS[e])) for e in tri]

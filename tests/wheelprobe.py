@@ -6,6 +6,12 @@ module carried into the sandbox). So the probe tries *every* callable reachable 
 modules (public or private, plain Python or compiled, module-level or a class's static and
 class methods) on the hidden cases of *every* graded function, and reports each callable that
 gives the reference's answer on all of them, judged by that exercise's own comparison rule.
+Data answer too: every module-level array, list, tuple or dict is tried as a constant and as a
+table indexed by an exercise's integer argument (``T[i]``, and ``T[i, :N[i]]`` for every 1-D
+integer count table ``N`` of the same length, the layout of a triangle table and its counts);
+and the objects that the copy's zero-argument constructors and ``*_explorer()`` factories
+return (figures headless) are walked, one level of attributes and the lists and dicts within:
+their methods are tried as callables, their arrays, tables and floats as data.
 
 :func:`find_answers` runs the probe with any interpreter (the instructors' venv, where it must
 find every reference: the probe's own oracle; or the students' environment, where it must find
@@ -36,6 +42,9 @@ MEMORY_LIMIT = 8 << 30
 #: CPU seconds one call may take (``ITIMER_PROF``: the process's own CPU time, so a busy
 #: machine never stops a reference early; each of them answers in milliseconds)
 CPU_BUDGET = 1.0
+#: CPU seconds a zero-argument constructor or explorer factory may take (an explorer builds a
+#: figure and its widgets)
+FACTORY_BUDGET = 20.0
 #: wall seconds one call may take, a backstop only for a callable that blocks without using
 #: CPU (a sleep, a read); far beyond any reference's time however busy the machine
 WALL_BACKSTOP = 30.0
@@ -104,46 +113,213 @@ try:
     import matplotlib.pyplot as plt
 except Exception:
     plt = None
-seen, found, tried = set(), {}, 0
+
+def _call(fn, args=(), kwargs=None, budget=None):
+    """``fn(*args, **kwargs)`` within its CPU budget, printing nothing; ``_Slow`` on any error."""
+    stdout, sys.stdout = sys.stdout, io.StringIO()
+    signal.setitimer(signal.ITIMER_PROF, budget or cpu_budget)
+    signal.setitimer(signal.ITIMER_REAL, wall_backstop)
+    try:
+        return fn(*args, **(kwargs or {}))
+    except BaseException:
+        return _Slow
+    finally:
+        signal.setitimer(signal.ITIMER_PROF, 0)
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        sys.stdout = stdout
+
+import time
+seen, found, tried, seconds = set(), {}, 0, {}
+started = time.monotonic()
+
+def _try(qual, fn):
+    """Try callable ``fn`` on every exercise's cases; record it where it answers all of them."""
+    global tried
+    try:
+        signature = inspect.signature(fn)
+    except (TypeError, ValueError):
+        signature = None
+    for exercise, rows in cases.items():
+        outputs = []
+        if signature is not None:
+            try:
+                signature.bind(*pickle.loads(rows[0][0]), **pickle.loads(rows[0][1]))
+            except TypeError:
+                continue
+        for args, kwargs, expected in rows:
+            tried += 1
+            got = _call(fn, pickle.loads(args), pickle.loads(kwargs))
+            if got is _Slow or not _screen(expected, got):
+                break
+            outputs.append(got)
+        else:
+            found.setdefault(exercise, {})[qual] = pickle.dumps(outputs)
+        if plt is not None:
+            plt.close("all")
+
 for module in modules:
     for qual, fn in _callables(module):
         if id(fn) in seen:
             continue
         seen.add(id(fn))
-        try:
-            signature = inspect.signature(fn)
-        except (TypeError, ValueError):
-            signature = None
-        for exercise, rows in cases.items():
+        _try(qual, fn)
+
+seconds["callables"] = time.monotonic() - started
+
+# -- data: tables indexed by an exercise's integer argument, and constants --------------------
+
+def _is_int(a):
+    return isinstance(a, (int, np.integer)) and not isinstance(a, (bool, np.bool_))
+
+def _index_position(rows):
+    """The first positional argument that is an integer in every case (a table's index)."""
+    decoded = [pickle.loads(r[0]) for r in rows]
+    for p in range(len(decoded[0])):
+        if all(len(a) > p and _is_int(a[p]) for a in decoded):
+            return p, [int(a[p]) for a in decoded]
+    return None
+
+INDEXED = {ex: pos for ex, rows in cases.items() if (pos := _index_position(rows)) is not None}
+
+def _is_data(v):
+    return isinstance(v, (np.ndarray, list, tuple, dict)) and not callable(v)
+
+def _counts(v):
+    """``v`` as a 1-D integer count table, or None."""
+    if isinstance(v, dict) or not isinstance(v, (np.ndarray, list, tuple)) or len(v) == 0:
+        return None
+    try:
+        a = np.asarray(v)
+    except Exception:
+        return None
+    return a if a.ndim == 1 and a.dtype.kind in "iu" else None
+
+def _lookup(table, i, counts=None):
+    row = table[i]
+    if counts is not None:
+        row = np.asarray(row)[:int(counts[i])]
+    return row
+
+EXPECTED = {ex: [_floats(expected) for _, _, expected in rows] for ex, rows in cases.items()}
+
+def _constant_answers(exercise, floats):
+    """Does a value whose sorted floats are ``floats`` answer every case of ``exercise``?"""
+    return all(e is not None and e.shape == floats.shape
+               and bool(np.allclose(floats, e, rtol=1e-3, atol=1e-6, equal_nan=True))
+               for e in EXPECTED[exercise])
+
+def _screen_data(label, value, counts):
+    """Record ``value`` where, as a constant or as a table ``T[i]`` / ``T[i, :N[i]]`` (N among
+    ``counts``) indexed by an exercise's integer argument, it answers every case."""
+    floats = _floats(value)             # sorted once: a table may hold a million samples
+    for exercise, rows in cases.items():
+        if floats is not None and _constant_answers(exercise, floats):
+            found.setdefault(exercise, {})[label] = pickle.dumps([value] * len(rows))
+        if exercise not in INDEXED or isinstance(value, (str, bytes)):
+            continue
+        _, indices = INDEXED[exercise]
+        size = (None if isinstance(value, dict) or (isinstance(value, np.ndarray) and value.ndim == 0)
+                else len(value))
+        for n_label, n in [(None, None)] + counts:
+            if n is not None and (n is value or size is None or len(n) != size):
+                continue
             outputs = []
-            if signature is not None:
+            for i, (_, _, expected) in zip(indices, rows):
                 try:
-                    signature.bind(*pickle.loads(rows[0][0]), **pickle.loads(rows[0][1]))
-                except TypeError:
-                    continue
-            for args, kwargs, expected in rows:
-                tried += 1
-                stdout, sys.stdout = sys.stdout, io.StringIO()
-                signal.setitimer(signal.ITIMER_PROF, cpu_budget)
-                signal.setitimer(signal.ITIMER_REAL, wall_backstop)
-                try:
-                    got = fn(*pickle.loads(args), **pickle.loads(kwargs))
-                except BaseException:
-                    got = _Slow
-                finally:
-                    signal.setitimer(signal.ITIMER_PROF, 0)
-                    signal.setitimer(signal.ITIMER_REAL, 0)
-                    sys.stdout = stdout
-                if got is _Slow or not _screen(expected, got):
+                    got = _lookup(value, i, n)
+                except Exception:
+                    break
+                if not _screen(expected, got):
                     break
                 outputs.append(got)
             else:
-                found.setdefault(exercise, {})[qual] = pickle.dumps(outputs)
-            if plt is not None:
-                plt.close("all")
+                name = f"{label}[i]" if n is None else f"{label}[i, :{n_label}[i]]"
+                found.setdefault(exercise, {})[name] = pickle.dumps(outputs)
+
+def _module_data(module):
+    for name, v in sorted(vars(module).items()):
+        if _is_data(v):
+            yield f"{module.__name__}.{name}", v
+
+data, counts, seen_data = [], [], set()
+for module in modules:
+    for label, v in _module_data(module):
+        if id(v) not in seen_data:
+            seen_data.add(id(v))
+            data.append((label, v))
+            if _counts(v) is not None:
+                counts.append((label, _counts(v)))
+
+# -- objects: what zero-argument constructors and explorer factories return ---------------------
+
+def _within(label, v):
+    """``v``'s items when it is a list, tuple or dict (one level)."""
+    if isinstance(v, (list, tuple)):
+        return [(f"{label}[{j}]", x) for j, x in enumerate(v[:64])]
+    if isinstance(v, dict):
+        return [(f"{label}[{k!r}]", x) for k, x in list(v.items())[:64]]
+    return []
+
+def _walk(label, obj):
+    """``obj``, its attributes (one level) and the items of its lists and dicts."""
+    out = [(label, obj)] + _within(label, obj)
+    attrs = getattr(obj, "__dict__", None)
+    for name, v in sorted(attrs.items()) if isinstance(attrs, dict) else ():
+        out += [(f"{label}.{name}", v)] + _within(f"{label}.{name}", v)
+    for name in dir(type(obj)) if not isinstance(obj, (list, tuple, dict, np.ndarray)) else ():
+        if not name.startswith("__"):
+            v = getattr(type(obj), name, None)
+            if inspect.isfunction(v):
+                out.append((f"{label}.{name}", getattr(obj, name, None)))
+    return out
+
+def _factories(module):
+    for name, obj in sorted(vars(module).items()):
+        owner = getattr(obj, "__module__", "") or ""
+        if not (owner == package or owner.startswith(package + ".")) or not callable(obj):
+            continue
+        if not (inspect.isclass(obj) or name.lower().endswith("explorer")):
+            continue
+        try:
+            inspect.signature(obj).bind()
+        except (TypeError, ValueError):
+            continue
+        yield f"{module.__name__}.{name}()", obj
+
+objects, made = 0, set()
+started = time.monotonic()
+for module in modules:
+    for label, factory in _factories(module):
+        if id(factory) in made:
+            continue
+        made.add(id(factory))
+        obj = _call(factory, budget=float(os.environ["PROBE_FACTORY_BUDGET"]))
+        if obj is _Slow:
+            continue
+        objects += 1
+        for qual, v in _walk(label, obj):
+            if (_is_data(v) or isinstance(v, (float, np.floating))) and id(v) not in seen_data:
+                seen_data.add(id(v))
+                data.append((qual, v))
+            elif callable(v) and not inspect.isclass(v) and id(v) not in seen:
+                seen.add(id(v))
+                _try(qual, v)
+        if plt is not None:
+            plt.close("all")
+
+seconds["objects"] = time.monotonic() - started
+started = time.monotonic()
+unscreened = []
+for label, v in data:
+    try:
+        _screen_data(label, v, counts)
+    except Exception as exc:            # reported, so that a blind spot is seen
+        unscreened.append(f"{label}: {exc!r}"[:200])
+seconds["data"] = time.monotonic() - started
 with open(out_path, "wb") as f:
     pickle.dump({"found": found, "broken": broken, "modules": [m.__name__ for m in modules],
-                 "callables": len(seen), "calls": tried}, f)
+                 "callables": len(seen), "calls": tried, "tables": len(data),
+                 "objects": objects, "seconds": seconds, "unscreened": unscreened}, f)
 sys.stdout.flush()
 os._exit(0)
 '''
@@ -188,7 +364,7 @@ def find_answers(python: str | Path, workdir: Path, env: dict | None = None,
     (workdir / "cases.pkl").write_bytes(pickle.dumps(sent))
     env = dict(os.environ if env is None else env, MPLBACKEND="Agg",
                PROBE_MEMORY_LIMIT=str(MEMORY_LIMIT), PROBE_CPU_BUDGET=str(CPU_BUDGET),
-               PROBE_WALL_BACKSTOP=str(WALL_BACKSTOP))
+               PROBE_WALL_BACKSTOP=str(WALL_BACKSTOP), PROBE_FACTORY_BUDGET=str(FACTORY_BUDGET))
     proc = subprocess.run([str(python), "-I", "-c", STUDENT_SIDE, "cases.pkl", "found.pkl",
                            package, *map(str, path)],
                           cwd=workdir, env=env, capture_output=True, text=True,
@@ -204,7 +380,8 @@ def find_answers(python: str | Path, workdir: Path, env: dict | None = None,
             if all(_matches(ex, row, got) for row, got in zip(rows, outputs)):
                 answers.setdefault(name, []).append(qual)
     return {"answers": {k: sorted(v) for k, v in sorted(answers.items())},
-            **{k: raw[k] for k in ("broken", "modules", "callables", "calls")}}
+            **{k: raw[k] for k in ("broken", "modules", "callables", "calls", "tables",
+                                   "objects", "seconds", "unscreened")}}
 
 
 def _matches(ex, row, got) -> bool:

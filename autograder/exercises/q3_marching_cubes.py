@@ -133,10 +133,11 @@ def _case_of_answer() -> dict[bytes, int]:
             for i in range(256) if mc.ambiguous_faces(i)}
 
 
-@up_to("triangle order and the first edge of each triangle (any triangulation of the joined "
-       "contour passes)")
+@up_to("the order of the triangles, the edge each triangle starts from (its winding kept) and "
+       "which diagonals cut each loop: any triangulation of the joined contour, wound like "
+       "TRI_TABLE, passes")
 def same_joined_patch(expected, received) -> Mismatch | None:
-    """Any triangulation of the joined contour of the expected case, up to vertex order.
+    """Any triangulation of the joined contour of the expected case, wound like the table.
 
     The case is the one whose reference answer ``expected`` is. ``received`` must be ``(t, 3)``
     edge numbers of edges that case crosses, as many triangles as the reference (``n - 2`` per
@@ -280,10 +281,16 @@ def _orbit_cases(rng):
 
 
 def _ambiguous_indices(rng):
-    """A random member of each of the six face-ambiguous classes (rotations and complement)."""
+    """A random member of each of the six face-ambiguous classes (rotations and complement),
+    never the representative whose alternative the notebook's figure and explorer draw
+    (``course_lib._mc_case_data.SHOWN_INDICES``: shipped, so it would answer the case)."""
+    from course_lib._mc_case_data import SHOWN_INDICES
+
     for case in mc.BASE_CASES:
         if case.ambiguous:
-            yield int(rng.choice(mc.symmetry_orbit(case.index, complement=True)))
+            orbit = [i for i in mc.symmetry_orbit(case.index, complement=True).tolist()
+                     if i not in SHOWN_INDICES]
+            yield int(rng.choice(orbit))
 
 
 def _alternative_cases(rng):

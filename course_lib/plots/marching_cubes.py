@@ -8,7 +8,9 @@ them in place with ``set_verts`` and ``set_data_3d``.
 Nothing here runs the graded maths (the students' copy of the library has none of it): a cell
 of the case figures has corner values 0 (inside) and 1 (outside), so its triangles are the rows
 of :data:`~course_lib.marching_cubes.TRI_TABLE` with each vertex at the fraction ``iso`` of its
-edge from the inside corner (:func:`drawn_triangles`, drawn to display precision); the sphere
+edge from the inside corner (:func:`drawn_triangles`, drawn to display precision); the joined
+(alternative) triangulation of Q3(c) is drawn for the representative of each ambiguous case
+only (:func:`shows_alternative`: the graded question is the other orientations); the sphere
 and the hole are meshes the course's references made when the library was built
 (:mod:`course_lib.mc_results`).
 """
@@ -19,6 +21,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 
+from .. import _mc_case_data
 from .. import marching_cubes as mc
 from .. import mc_results
 from ..plotting import COLOURS
@@ -37,6 +40,7 @@ __all__ = [
     "plot_hole",
     "plot_projected_prism",
     "plot_sphere_mesh",
+    "shows_alternative",
     "update_case",
 ]
 
@@ -92,13 +96,20 @@ def draw_cube(ax, labels: bool = False):
     return art
 
 
+def shows_alternative(index: int) -> bool:
+    """Whether the figures and the explorer draw case ``index``'s alternative triangulation:
+    for the representative of each of Lorensen's six ambiguous cases (the figure of Q3(c)),
+    not for their other orientations, which are ``alternative_triangulation``'s hidden cases."""
+    return int(index) in _mc_case_data.SHOWN_INDICES
+
+
 def drawn_triangles(index: int, iso: float = 0.5, alternative: bool = False) -> np.ndarray:
     """The triangles drawn for case ``index`` at level ``iso``, shape ``(t, 3, 3)``.
 
     The corners of the drawn cell hold 0 (inside) and 1 (outside), so each vertex sits at the
     fraction ``iso`` of its edge from the inside corner (Q3(a)); the edges are the case's row of
-    :data:`~course_lib.marching_cubes.TRI_TABLE` (with ``alternative``, of
-    :data:`~course_lib.marching_cubes.ALT_TRI_TABLE`, Q3(c)). Coordinates are rounded to
+    :data:`~course_lib.marching_cubes.TRI_TABLE` (with ``alternative``, the joined triangulation
+    of Q3(c), for the cases of :func:`shows_alternative` only). Coordinates are rounded to
     :data:`DISPLAY_DECIMALS`.
     """
     index = int(index)
@@ -107,9 +118,13 @@ def drawn_triangles(index: int, iso: float = 0.5, alternative: bool = False) -> 
     iso = float(iso)
     if not 0.0 < iso < 1.0:
         raise ValueError(f"iso must lie strictly between 0 and 1, got {iso}")
-    table, ntri = ((mc.ALT_TRI_TABLE, mc.ALT_N_TRIANGLES) if alternative
-                   else (mc.TRI_TABLE, mc.N_TRIANGLES))
-    edges = table[index, :ntri[index]]                                  # (t, 3)
+    if alternative and not shows_alternative(index):
+        raise ValueError(f"the alternative triangulation is drawn only for the representatives "
+                         f"{_mc_case_data.SHOWN_INDICES} of the ambiguous cases, not case {index}")
+    if alternative:
+        edges = np.array(_mc_case_data.shown_alternatives()[index], dtype=np.int64)
+    else:
+        edges = mc.TRI_TABLE[index, :mc.N_TRIANGLES[index]]             # (t, 3)
     a, b = mc.EDGES[edges, 0], mc.EDGES[edges, 1]
     t = np.where((index >> a) & 1, iso, 1.0 - iso)          # from a: iso if a is inside
     tris = mc.CORNERS[a] + t[..., None] * (mc.CORNERS[b] - mc.CORNERS[a])

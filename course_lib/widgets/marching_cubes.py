@@ -2,7 +2,9 @@
 
 :class:`CaseExplorer` shows one cell of the grid: its corners (red inside, white outside), the
 triangles the lookup table gives for its case, and, for the six ambiguous cases, a switch to the
-alternative triangulation of Q3(c). The corner values are 0 (inside) and 1 (outside), so the
+alternative triangulation of Q3(c): shown for Lorensen's representative of each (the one the
+"Lorensen case" menu picks, as in the notebook's figure); the other orientations are for the
+student to work out, (c.1). The corner values are 0 (inside) and 1 (outside), so the
 iso-level slider moves every vertex along its edge to the fraction ``iso`` of the way from the
 inside corner: the linear interpolation of Q3(a) (the table says *which* edge, the data say
 *where* on it).
@@ -25,9 +27,10 @@ import ipywidgets as W
 import matplotlib.pyplot as plt
 import numpy as np
 
+from .. import _mc_case_data
 from .. import marching_cubes as mc
 from ._view import FigureExplorer, one_at_a_time
-from ..plots.marching_cubes import case_values, draw_case, update_case
+from ..plots.marching_cubes import case_values, draw_case, shows_alternative, update_case
 
 __all__ = ["CaseExplorer", "case_explorer", "case_summary"]
 
@@ -36,12 +39,17 @@ def case_summary(index: int, alternative: bool = False) -> str:
     """One line of HTML about case ``index``: corners inside, class, triangles, ambiguity."""
     inside = [c for c in range(8) if (index >> c) & 1]
     amb = mc.ambiguous_faces(index)
-    ntri = (mc.ALT_N_TRIANGLES if alternative and amb else mc.N_TRIANGLES)[index]
+    alternative = bool(alternative and amb and shows_alternative(index))
+    ntri = (len(_mc_case_data.shown_alternatives()[index]) if alternative
+            else int(mc.N_TRIANGLES[index]))
     text = (f"index <b>{index}</b> = 0b{index:08b}; inside corners {inside or 'none'}; "
             f"Lorensen case <b>{mc.case_of(index)}</b>; {ntri} triangle(s)")
     if amb:
         which = "joined (alternative)" if alternative else "kept apart (our table)"
         text += f"; {len(amb)} ambiguous face(s), inside corners {which}"
+        if not shows_alternative(index):
+            text += ("; the alternative is drawn for this case's representative (choose it "
+                     "under Lorensen case); this orientation's is yours to work out, (c.1)")
     return text
 
 
@@ -124,9 +132,9 @@ class CaseExplorer(FigureExplorer):
     def update(self):
         """Move the triangles and corner colours to the current controls and redraw."""
         index = self.index.value
-        ambiguous = bool(mc.ambiguous_faces(index))
-        self.alternative.disabled = not ambiguous
-        alt = self.alternative.value and ambiguous
+        shown = bool(mc.ambiguous_faces(index)) and shows_alternative(index)
+        self.alternative.disabled = not shown
+        alt = self.alternative.value and shown
         self.triangles = update_case(self.art, index, alternative=alt, iso=self.iso.value)
         self.title.set_text(f"case index {index} (Lorensen case {mc.case_of(index)}), "
                             f"iso {self.iso.value:.2f}")

@@ -20,6 +20,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
+from course_lib import _mc_case_data, _mc_tables
 from course_lib import marching_cubes as mc
 from course_lib import mesh
 
@@ -240,6 +241,67 @@ def test_base_cases_are_lorensens_fifteen():
                for p in _perms(_rotation_group()))
 
 
+def test_case_of_is_the_class_of_the_independent_orbits():
+    """Every case index gets the Lorensen number of the base case in its class (classes from
+    the independently generated rotation group, with complement), and bad indices are refused."""
+    for cl in _orbits(True, False):
+        numbers = {c.number for c in mc.BASE_CASES if c.index in cl}
+        assert len(numbers) == 1
+        assert {mc.case_of(i) for i in cl} == numbers
+    for bad in (256, -1, 2.5):
+        with pytest.raises(ValueError):
+            mc.case_of(bad)
+
+
+def _students_module(module):
+    """The students' copy of a generated module (its ``students_copy()`` text), executed."""
+    namespace = {}
+    exec(compile(module.students_copy(), f"<students' {module.__name__}>", "exec"), namespace)
+    return namespace
+
+
+def test_students_tables_are_the_generators_and_hold_no_alternative():
+    """The students' ``_mc_tables`` (literals made at wheel build) gives the generated tables
+    bit for bit, the same ambiguous faces, and neither the alternative table nor a generator."""
+    theirs = _students_module(_mc_tables)
+    for name in _mc_tables.STUDENTS_TABLES:
+        ours = getattr(_mc_tables, name)
+        assert theirs[name].dtype == ours.dtype, name
+        np.testing.assert_array_equal(theirs[name], ours, err_msg=name)
+    assert all(theirs["ambiguous_faces"](i) == _mc_tables.ambiguous_faces(i) for i in range(256))
+    public = {k for k in theirs if not k.startswith("_")} - {"annotations", "np"}
+    assert public == set(_mc_tables.STUDENTS_TABLES) | {"ambiguous_faces"}
+    assert not {"ALT_TRI_TABLE", "ALT_N_TRIANGLES", "case_triangles", "_case_loops"} & set(theirs)
+
+
+def test_students_case_data_are_the_references():
+    """The students' ``_mc_case_data``: Lorensen's number of each index as the orbits give it,
+    and the joined rows of the six representatives only, those of the alternative table."""
+    theirs = _students_module(_mc_case_data)
+    labels = theirs["case_labels"]()
+    assert len(labels) == 256 and labels == tuple(mc.case_of(i) for i in range(256))
+    reps = [c.index for c in mc.BASE_CASES if c.ambiguous]
+    assert theirs["SHOWN_INDICES"] == tuple(reps) == _mc_case_data.SHOWN_INDICES
+    shown = theirs["shown_alternatives"]()
+    assert sorted(shown) == sorted(reps)
+    for index, rows in shown.items():
+        np.testing.assert_array_equal(np.array(rows), mc.alternative_triangulation(index))
+        assert mc.closes_up(index, np.array(rows))
+
+
+def test_hidden_alternative_cases_are_never_a_shown_representative():
+    """``alternative_triangulation``'s hidden cases cover the six ambiguous classes in other
+    orientations than the ones the figures draw (those rows are shipped)."""
+    from autograder.exercises import REGISTRY
+
+    ex = REGISTRY["alternative_triangulation"]
+    for seed in range(40):
+        cases = [c for c in ex.draw_cases(np.random.default_rng(seed)) if c.raises is None]
+        hidden = [c.args[0] for c in cases if not c.visible]
+        assert not set(hidden) & set(_mc_case_data.SHOWN_INDICES)
+        assert sorted(mc.case_of(i) for i in hidden) == [3, 6, 7, 10, 12, 13]
+
+
 # Bourke's published edgeTable, first sixteen entries
 BOURKE_EDGE_TABLE_0_15 = [0x0, 0x109, 0x203, 0x30a, 0x406, 0x50f, 0x605, 0x70c,
                           0x80c, 0x905, 0xa0f, 0xb06, 0xc0a, 0xd03, 0xe09, 0xf00]
@@ -274,8 +336,8 @@ def test_tables_follow_a_face_rule(alternative):
     """Every triangle edge on a cube face joins two crossed edges of that face; on an ambiguous
     face the consistent table keeps the inside corners apart, the alternative joins them."""
     edge_corners = [set(e) for e in BOURKE_EDGES]
-    table = mc.ALT_TRI_TABLE if alternative else mc.TRI_TABLE
-    ntri = mc.ALT_N_TRIANGLES if alternative else mc.N_TRIANGLES
+    table = _mc_tables.ALT_TRI_TABLE if alternative else mc.TRI_TABLE
+    ntri = _mc_tables.ALT_N_TRIANGLES if alternative else mc.N_TRIANGLES
     for i in range(256):
         tris = table[i, :ntri[i]]
         crossed = {e for e in range(12) if mc.EDGE_TABLE[i] >> e & 1}
@@ -704,7 +766,7 @@ def test_joined_patch_rule_rejects_a_triangle_flat_in_a_face():
 def _candidate_triangulations(index, rng):
     """The table's row, the joined row, the joined row reversed, and random triangles of the
     crossed edges (mostly not closing up)."""
-    alt = mc.ALT_TRI_TABLE[index, :mc.ALT_N_TRIANGLES[index]]
+    alt = _mc_tables.ALT_TRI_TABLE[index, :_mc_tables.ALT_N_TRIANGLES[index]]
     out = [alt, mc.TRI_TABLE[index, :mc.N_TRIANGLES[index]], alt[:, ::-1], alt[:-1]]
     crossed = [e for e in range(12) if (int(mc.EDGE_TABLE[index]) >> e) & 1]
     if crossed:

@@ -65,6 +65,60 @@ FORGED = {
 }
 
 
+#: a copy laid out as q3's wheel was before its alternative table left it: a triangle table and
+#: its counts (``T[i, :N[i]]`` is ``alternative_triangulation(i)``), an explorer whose object
+#: keeps an answer and a method that computes one, and a table and an explorer that answer
+#: nothing (rounded readouts, another function's rows)
+FORGED_TABLES = {
+    "forged_tables/__init__.py": """
+        import numpy as np
+        from course_lib import _mc_tables, shading
+
+        ALT_TRI_TABLE = _mc_tables.ALT_TRI_TABLE.copy()
+        ALT_N_TRIANGLES = _mc_tables.ALT_N_TRIANGLES.copy()
+        TRI_TABLE = _mc_tables.TRI_TABLE.copy()            # the table's own rows: no answer
+        N_TRIANGLES = _mc_tables.N_TRIANGLES.copy()
+
+        class Explorer:
+            def __init__(self, L=(0.0, 0.6, 0.8), N=(0.0, 0.0, 1.0)):
+                self.shown = np.round(shading.reflect(L, N), 3)
+                self.views = {"joined": ALT_TRI_TABLE.copy()}  # a table inside a dict
+
+            def bounce(self, L, N):                           # a method of the object
+                return shading.reflect(L, N)
+
+        class Readout:
+            def __init__(self):
+                self.level = 0.5
+                self.rounded = [np.round(shading.reflect((0.0, 0.6, 0.8), (0.0, 0.0, 1.0)), 3)]
+
+        def forged_explorer():
+            return Explorer()
+        """,
+}
+
+
+def test_probe_flags_a_triangle_table_and_what_an_explorer_keeps(tmp_path):
+    """Today's layout of q3's alternative table (``T[i, :N[i]]``) is flagged, and so are a table
+    kept in an explorer object's dict and a method of that object; the table's own rows and a
+    rounded readout are not."""
+    for rel, text in FORGED_TABLES.items():
+        (tmp_path / "copy" / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / "copy" / rel).write_text(textwrap.dedent(text))
+    result = wheelprobe.find_answers(sys.executable, tmp_path / "work", package="forged_tables",
+                                     path=(str(tmp_path / "copy"),))
+    assert result["broken"] == {} and result["unscreened"] == []
+    assert result["objects"] == 3                        # Explorer(), Readout(), forged_explorer()
+    answers = result["answers"]
+    assert answers.pop("alternative_triangulation") == [
+        "forged_tables.ALT_TRI_TABLE[i, :forged_tables.ALT_N_TRIANGLES[i]]",
+        "forged_tables.Explorer().views['joined'][i, :forged_tables.ALT_N_TRIANGLES[i]]",
+        "forged_tables.forged_explorer().views['joined'][i, :forged_tables.ALT_N_TRIANGLES[i]]",
+    ]
+    assert answers == {"reflect": ["forged_tables.Explorer().bounce",
+                                   "forged_tables.forged_explorer().bounce"]}
+
+
 def test_probe_flags_helpers_under_other_names_and_not_readouts(tmp_path):
     for rel, text in FORGED.items():
         (tmp_path / "copy" / rel).parent.mkdir(parents=True, exist_ok=True)
@@ -98,10 +152,12 @@ def wheel_answers(tmp_path_factory):
     result = wheelprobe.find_answers(studentenv.python(), tmp_path_factory.mktemp("probe"),
                                      env=studentenv.env_vars())
     assert result["broken"] == {}, result["broken"]
+    assert result["unscreened"] == [], result["unscreened"]
     return result
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1800)      # the wheel's build (cached) and the probe, objects and tables
 @pytest.mark.xdist_group("student_env")
 def test_students_wheel_answers_only_what_its_explorers_still_need(wheel_answers):
     """No callable of the wheel answers a left-out graded function; the ones it still answers
@@ -134,15 +190,20 @@ try:
     mesh = "importable"
 except ImportError:
     mesh = "absent"
+from course_lib import _mc_tables
 gone = [n for n in ("cube_index", "interpolate_edge", "marching_cubes", "marching_cubes_loop",
-                    "cell_triangles", "hole_demo", "probe_triangulation") if hasattr(marching_cubes, n)]
+                    "cell_triangles", "hole_demo", "probe_triangulation", "cube_symmetries",
+                    "_orbit_labels", "ALT_TRI_TABLE") if hasattr(marching_cubes, n)]
+gone += [n for n in ("ALT_TRI_TABLE", "ALT_N_TRIANGLES", "case_triangles") if hasattr(_mc_tables, n)]
 drawn = {(i, iso, alt): drawn_triangles(i, iso, alt) for i in range(256) for iso in (0.13, 0.5, 0.98)
-         for alt in (False, True) if not alt or marching_cubes.ambiguous_faces(i)}
+         for alt in (False, True) if not alt or i in (5, 67, 26, 195, 135, 165)}
+labels = [marching_cubes.case_of(i) for i in range(256)]
 ex = CaseExplorer(index=165, iso=0.31)
 ex.alternative.value = True
-alt5 = marching_cubes.ALT_TRI_TABLE[5, :marching_cubes.ALT_N_TRIANGLES[5]]
+alt5 = marching_cubes.TRI_TABLE[250, :marching_cubes.N_TRIANGLES[250], ::-1]   # joined
 with open(sys.argv[1], "wb") as f:
     pickle.dump({"data": dict(load()), "drawn": drawn, "explorer": ex.triangles, "mesh": mesh,
+                 "labels": labels,
                  "gone": gone, "closes": [marching_cubes.closes_up(5, alt5),
                                           marching_cubes.closes_up(5, alt5[:, ::-1])],
                  "convergence": mc_results.sphere_convergence()}, f)
@@ -153,8 +214,10 @@ with open(sys.argv[1], "wb") as f:
 @pytest.mark.xdist_group("student_env")
 def test_students_q3_figures_are_the_instructors(tmp_path):
     """In the students' environment: q3's shipped results are the references' bit for bit, the
-    case figures and explorer draw the references' triangles (to display precision, 1e-4),
-    ``closes_up`` works, and the march, the graded functions and ``course_lib.mesh`` are absent."""
+    case figures and explorer draw the references' triangles (to display precision, 1e-4; the
+    alternative for the six shown representatives), ``case_of`` labels every case as the
+    orbits do, ``closes_up`` works, and the march, the symmetry group, the alternative table,
+    the graded functions and ``course_lib.mesh`` are absent."""
     if shutil.which("gcc") is None:
         pytest.skip("no C compiler (make wheel-deps)")
     import pickle
@@ -162,7 +225,7 @@ def test_students_q3_figures_are_the_instructors(tmp_path):
     import numpy as np
     import studentenv
 
-    from course_lib import _mc_results_data
+    from course_lib import _mc_case_data, _mc_results_data
     from course_lib import marching_cubes as mc
     from course_lib.plots.marching_cubes import case_values
 
@@ -171,6 +234,7 @@ def test_students_q3_figures_are_the_instructors(tmp_path):
     assert proc.returncode == 0, proc.stderr[-3000:]
     got = pickle.loads(out.read_bytes())
     assert got["mesh"] == "absent" and got["gone"] == []
+    assert got["labels"] == [int(label) for label in _mc_case_data.compute()["case_of"]]
     assert got["closes"] == [True, False]
     ref = _mc_results_data.compute()
     assert sorted(got["data"]) == sorted(ref)
