@@ -54,15 +54,6 @@ SHIPPED_AS_SOURCE = ("course_lib.answers", "course_lib.variants")
 #: explorer, a figure or a release notebook's cell computes with them; every other graded
 #: function's reference is left out of the wheel (:func:`withheld_functions`).
 #: docs/students-copy.md gives the plan that empties this set.
-<<<<<<< HEAD
-<<<<<<< HEAD
-<<<<<<< HEAD
-STILL_SHIPPED: frozenset[str] = frozenset()
-=======
-STILL_SHIPPED: frozenset[str] = frozenset()
-=======
-STILL_SHIPPED: frozenset[str] = frozenset()
-=======
 STILL_SHIPPED: frozenset[str] = frozenset()
 #: helpers the students' wheel leaves out with the graded functions: each computes a left-out
 #: function's answer (or part of it) or calls one; ``{module: (function, ...)}``
@@ -71,7 +62,6 @@ LEFT_OUT_HELPERS = {
         "_check_volume", "_active_cells", "_march", "_axis_vertices", "marching_cubes_loop",
         "_table_triangles", "_march_loop", "cell_triangles", "hole_demo", "probe_triangulation",
         "cube_symmetries", "_apply", "_orbit_labels", "_cycle_lengths"),   # Q3(b)'s orbits
-<<<<<<< HEAD
     "course_lib.ultrasound": ("phantom_interfaces", "displayed_faces"),  # q1: displayed depths
     "course_lib.gamma_camera": ("pmt_cascade", "exam_cutoff_radius", "exact_cutoff_radius",  # q2
                                 "transmission_profile", "compare_models"),
@@ -81,8 +71,6 @@ LEFT_OUT_HELPERS = {
                            "highlight_pixel", "render_sphere", "sphere_normals", "view_basis"),
     "course_lib.clipping": ("clip_against_plane", "clip_steps", "clip_polygons", "_clip_array",
                             "_clip_plane_array", "_clip_batch", "_clip_rows", "shoelace_area"),
-=======
->>>>>>> w21q3p
 }
 #: shipped routines that compute with left-out functions yet answer no graded question: each
 #: returns only a whole figure, an 8-bit image, text, or numbers at display precision, and
@@ -105,7 +93,6 @@ INLINE_INTO: dict[str, tuple[str, ...]] = {
 INSTRUCTORS_ONLY = ("course_lib.mesh", "course_lib._polygons", "course_lib.spectral_render")
 #: modules whose students' copy is generated when the wheel is built: the text their
 #: ``students_copy()`` returns (e.g. the results of the references on a figure's fixed inputs)
-<<<<<<< HEAD
 GENERATED_MODULES = (
     "course_lib._mc_results_data", "course_lib._mc_tables", "course_lib._mc_case_data",  # q3
     "course_lib._collimator_results_data",                                          # q2
@@ -113,10 +100,6 @@ GENERATED_MODULES = (
     "course_lib._spectral_spheres_data",                                            # q5
     "course_lib._clip_results_data",                                                # q6
 )
-=======
-GENERATED_MODULES = ("course_lib._mc_results_data",
-                     "course_lib._mc_tables", "course_lib._mc_case_data")  # no ALT table, no orbits
->>>>>>> w21q3p
 #: the instructors' requirements a student's environment needs (versions come from our own
 #: package metadata, so the two never disagree)
 STUDENT_REQUIREMENTS = ("numpy", "matplotlib", "ipywidgets", "ipympl", "anywidget", "jupyterlab",
