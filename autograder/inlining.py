@@ -204,6 +204,10 @@ def _c_copy(mod: _Module, name: str, here: str, left, aliases: dict) -> tuple[as
         renames = {g: _alias_name(mod.name, g) for g in glob}
         aliases.update({(mod.name, g): a for g, a in renames.items()})
         node = _Rename(renames).visit(node)
+    # no defaults: a default may name its own module's globals, and every call of a copy
+    # passes every argument (:func:`_fill_defaults`)
+    node.args.defaults = []
+    node.args.kw_defaults = [None] * len(node.args.kwonlyargs)
     node.name = c_name(mod.name, name)
     node.decorator_list = [ast.Attribute(ast.Name("cython", ast.Load()), "cfunc", ast.Load())]
     return node, redirect

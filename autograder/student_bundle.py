@@ -41,7 +41,7 @@ from pathlib import Path
 from packaging.requirements import Requirement
 
 from .course import REPO_ROOT, file_lock
-from .inlining import inline_into
+from .inlining import CFUNC, inline_into
 
 LIBRARY = "course_lib"
 LIBRARY_DIR = REPO_ROOT / LIBRARY
@@ -50,11 +50,6 @@ DIST_NAME = "4f9-course-student"
 #: call (it holds no key: the grader alone does), and each student's numbers and order of
 #: options (a pure function of the id; no answers)
 SHIPPED_AS_SOURCE = ("course_lib.answers", "course_lib.variants")
-#: graded functions (by qualified name) the students' wheel still carries, because an
-#: explorer, a figure or a release notebook's cell computes with them; every other graded
-#: function's reference is left out of the wheel (:func:`withheld_functions`).
-#: docs/students-copy.md gives the plan that empties this set.
-STILL_SHIPPED: frozenset[str] = frozenset()
 #: helpers the students' wheel leaves out with the graded functions: each computes a left-out
 #: function's answer (or part of it) or calls one; ``{module: (function, ...)}``
 LEFT_OUT_HELPERS = {
@@ -155,14 +150,15 @@ def compiled_modules() -> list[str]:
 
 
 def withheld_functions() -> dict[str, tuple[str, ...]]:
-    """``{module: (function, ...)}``: the graded functions' references the students' wheel
-    leaves out (every graded function of the registry but :data:`STILL_SHIPPED`)."""
+    """``{module: (function, ...)}``: the graded functions' references, every one of which the
+    students' wheel leaves out (a new exercise's too: an explorer that needs its maths calls
+    it from a routine listed in :data:`INLINE_INTO`)."""
     from .exercises import REGISTRY
 
     out: dict[str, set[str]] = {}
     for ex in REGISTRY.values():
         ref = ex.reference
-        if ex.kind == "function" and ref.__qualname__ not in STILL_SHIPPED:
+        if ex.kind == "function":
             out.setdefault(ref.__module__, set()).add(ref.__qualname__)
     return {m: tuple(sorted(names)) for m, names in sorted(out.items())}
 
@@ -240,7 +236,7 @@ def names_used(text: str) -> set[str]:
     that can name an attribute (a call's argument, as in ``getattr(m, "f")``, or an entry of
     ``__all__``; a dictionary key "phong" names nothing)."""
     used = set()
-    for node in ast.walk(ast.parse(text)):
+    for node in _walk_outside_c_functions(ast.parse(text)):
         if isinstance(node, ast.Name):
             used.add(node.id)
         elif isinstance(node, ast.Attribute):
@@ -255,6 +251,19 @@ def names_used(text: str) -> set[str]:
             used.update(n.value for n in ast.walk(node.value)
                         if isinstance(n, ast.Constant) and isinstance(n.value, str))
     return used
+
+
+def _walk_outside_c_functions(tree: ast.AST):
+    """``ast.walk`` that skips the C-level copies :mod:`autograder.inlining` adds (their text
+    is a left-out function's own, strings and all; only compiled code can call them)."""
+    todo = [tree]
+    while todo:
+        node = todo.pop()
+        if isinstance(node, ast.FunctionDef) and any(
+                ast.unparse(d) == CFUNC for d in node.decorator_list):
+            continue
+        yield node
+        todo.extend(ast.iter_child_nodes(node))
 
 
 def library_packages() -> list[str]:

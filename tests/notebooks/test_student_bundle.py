@@ -7,9 +7,10 @@
 - no file of the wheel holds a solution cell's code, a model answer of a manually graded cell
   or a multiple-choice key (the byte search is shown to work on each module's docstring);
 - installed alone in a fresh virtual environment, the wheel exposes none of the graded
-  functions it leaves out (``student_bundle.withheld_functions``), and the references it still
-  carries (``STILL_SHIPPED``) with their docstrings and signatures, but neither ``inspect.getsource`` nor
-  IPython's ``??`` finds its source (the same probe does find it in the instructors' copy);
+  functions (``student_bundle.withheld_functions``: all of them), and the routines that draw
+  with their C-level copies (``INLINE_INTO``) keep their docstrings and signatures, but neither
+  ``inspect.getsource`` nor IPython's ``??`` finds their source (the same probe does find it in
+  the instructors' copy);
 - every release notebook runs in that environment (kernel included) with no error but a stub's;
 - in that environment nbgrader's instructor tools are off (its own Jupyter config), Validate on.
 """
@@ -79,16 +80,22 @@ def student_python(wheel) -> Path:
     return studentenv.python(wheel)
 
 
-def graded_references(shipped: bool = True) -> dict[str, tuple[str, str]]:
-    """``{exercise: (module, qualname)}`` of every graded function's reference the wheel still
-    carries (``shipped``) or leaves out."""
+def graded_references() -> dict[str, tuple[str, str]]:
+    """``{exercise: (module, qualname)}`` of every graded function's reference (the wheel
+    leaves every one out)."""
     from autograder.exercises import REGISTRY
-    from autograder.student_bundle import STILL_SHIPPED
 
     refs = {n: (ex.reference.__module__, ex.reference.__qualname__)
-            for n, ex in REGISTRY.items()
-            if ex.kind == "function" and (ex.reference.__qualname__ in STILL_SHIPPED) == shipped}
+            for n, ex in REGISTRY.items() if ex.kind == "function"}
     assert refs and all(m.startswith("course_lib.") for m, _ in refs.values()), refs
+    return refs
+
+
+def inlined_routines() -> dict[str, tuple[str, str]]:
+    """``{module.qualname: (module, qualname)}`` of the routines that draw with C-level copies
+    of graded functions (``student_bundle.INLINE_INTO``): the compiled code that holds maths."""
+    refs = {f"{m}.{q}": (m, q) for m, names in student_bundle.INLINE_INTO.items() for q in names}
+    assert refs, "no routine draws with a left-out function"
     return refs
 
 
@@ -227,7 +234,7 @@ def _probe_sources(targets):
 
 
 def test_student_env_has_no_left_out_reference(student_python, tmp_path):
-    refs = graded_references(shipped=False)
+    refs = graded_references()
     code = ("import importlib, json, sys\n"
             "refs = json.loads(sys.argv[1])\n"
             "found, absent = [], set()\n"
@@ -246,8 +253,8 @@ def test_student_env_has_no_left_out_reference(student_python, tmp_path):
     assert set(absent) == {m for m, _ in refs.values()} & set(student_bundle.INSTRUCTORS_ONLY)
 
 
-def test_student_env_hides_every_graded_reference(student_python, tmp_path):
-    refs = graded_references()
+def test_student_env_hides_the_source_of_every_inlined_routine(student_python, tmp_path):
+    refs = inlined_routines()
     code = textwrap.dedent(__import__("inspect").getsource(_probe_sources)) + (
         "\nimport json, sys\n"
         "print(json.dumps(_probe_sources(json.loads(sys.argv[1]))))\n")

@@ -9,9 +9,8 @@ own comparison rule:
   (each call's budget is CPU time, not the wall clock of a busy machine), and not a readout
   rounded to display precision, a routine that only draws nor one that never returns;
 - on the instructors' copy it finds every graded function's reference (its oracle);
-- on the students' wheel it finds none of the graded functions the wheel leaves out, and only
-  those an explorer or figure still computes with (``student_bundle.STILL_SHIPPED``); that it
-  finds nothing at all is the goal (docs/students-copy.md), a strict xfail until then.
+- on the students' wheel it finds nothing: no callable, table or explorer object of the wheel
+  answers any graded function (docs/students-copy.md).
 """
 
 from __future__ import annotations
@@ -159,22 +158,14 @@ def wheel_answers(tmp_path_factory):
 @pytest.mark.slow
 @pytest.mark.timeout(1800)      # the wheel's build (cached) and the probe, objects and tables
 @pytest.mark.xdist_group("student_env")
-def test_students_wheel_answers_only_what_its_explorers_still_need(wheel_answers):
-    """No callable of the wheel answers a left-out graded function; the ones it still answers
-    are exactly :data:`~autograder.student_bundle.STILL_SHIPPED` (shrink it with the plan)."""
+def test_students_wheel_answers_no_graded_function(wheel_answers):
+    """No callable, table or explorer object of the wheel answers any graded function, and the
+    wheel leaves out every graded function's reference (the probe's own oracle finds them all
+    in the instructors' copy)."""
     from autograder import student_bundle
 
     withheld = {n for names in student_bundle.withheld_functions().values() for n in names}
-    answered = {REGISTRY[name].reference.__qualname__ for name in wheel_answers["answers"]}
-    assert withheld and not answered & withheld, wheelprobe.summary(wheel_answers)
-    assert answered == set(student_bundle.STILL_SHIPPED), wheelprobe.summary(wheel_answers)
-
-
-@pytest.mark.slow
-@pytest.mark.xdist_group("student_env")
-@pytest.mark.xfail(strict=True, reason="the students' wheel still carries the references the "
-                   "explorers and figures compute with: docs/students-copy.md, 'Not done yet'")
-def test_students_wheel_answers_no_graded_function(wheel_answers):
+    assert len(withheld) == len(FUNCTIONS), sorted(withheld)
     assert wheel_answers["answers"] == {}, wheelprobe.summary(wheel_answers)
 
 
@@ -275,8 +266,43 @@ def test_students_q6_figures_are_the_instructors(tmp_path):
     explorer's display routine (C-level copies of the clipping references) shows what the
     instructors' shows, number for number and word for word, and the graded functions, the
     clipping machinery and ``course_lib._polygons`` are absent."""
+    if shutil.which("gcc") is None:
+        pytest.skip("no C compiler (make wheel-deps)")
+    import pickle
+
+    import numpy as np
+    import studentenv
+
+    from course_lib import _clip_results_data, clipping
+    from course_lib.widgets.clipping import clip_display
+
+    rng = np.random.default_rng(6)
+    polygons = [clipping.EXAM_Q6["A"], np.array([[0.0, 0, 0, 0], [1, 0, 0.5, 1], [0, 1, 0.5, 1]])]
+    polygons += [np.c_[rng.uniform(-3, 3, (n, 3)), rng.uniform(-1, 3, (n, 1))] for n in (3, 5, 8)]
+    (tmp_path / "in.pkl").write_bytes(pickle.dumps(polygons))
+    out = tmp_path / "q6.pkl"
+    proc = studentenv.run(Q6_IN_STUDENT_ENV, str(out), str(tmp_path / "in.pkl"), cwd=tmp_path,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    got = pickle.loads(out.read_bytes())
+    assert got["gone"] == [] and got["polygons"] is False
+    ref = _clip_results_data.compute()
+    assert sorted(got["data"]) == sorted(ref)
+    for name, array in ref.items():
+        np.testing.assert_array_equal(got["data"][name], array, err_msg=name)
+    for P, theirs in zip(polygons, got["shown"]):
+        ours = clip_display(P)
+        assert theirs["tables"] == ours["tables"] and theirs["inside"] == ours["inside"]
+        assert (theirs["error"] is None) == (ours["error"] is None)
+        for key in ("steps", "screen"):
+            for a, b in zip(theirs[key], ours[key]):
+                np.testing.assert_array_equal(a, b)
+    assert "after plane 6 of 6, far" in got["status"] and "4 vertices" in got["status"]
+    drawn, want = got["drawn"][:-1], np.array([[0, 0.5], [0.5, 0.5], [0.5, 1], [0.25, 1]])
+    assert any(np.allclose(np.roll(drawn, k, axis=0), want, atol=1e-12) for k in range(4)), drawn
+
+
 Q5_IN_STUDENT_ENV = r'''
-Q4_IN_STUDENT_ENV = r'''
 import pickle, sys
 import numpy as np
 import matplotlib
@@ -324,102 +350,10 @@ def test_students_q5_figures_are_the_instructors(tmp_path):
     """In the students' environment: the Phong explorer draws the instructors' spheres byte for
     byte and shows the same readouts, the spectral spheres are the references' pixels, and
     neither the five graded functions, their helpers nor course_lib.spectral_render are there."""
-Q2_SETTINGS = [(1.0, 40.0, 1000.0, 10.0, 4), (0.7, 33.0, 770.0, 7.5, 5), (2.3, 120.0, 260.0, 6.0, 8),
-               (0.4, 5.0, 3000.0, 2.0, 0), (3.1, 17.0, 90.0, 19.5, 2)]
-
-Q2_IN_STUDENT_ENV = r'''
-import pickle, sys
-import numpy as np
-from course_lib import collimator_results, gamma_camera
-from course_lib._collimator_results_data import load
-from course_lib.plots import gamma_camera as pg
-from course_lib.widgets.gamma_camera import CollimatorExplorer, collimator_model
-settings = SETTINGS
-gone = [n for n in ("pmt_gain", "collimator_resolution", "collimator_length_for_resolution",
-                    "ring_hole_positions", "open_fraction", "pmt_cascade", "exam_cutoff_radius",
-                    "exact_cutoff_radius", "transmission_profile", "compare_models")
-        if hasattr(gamma_camera, n)]
-holes = collimator_results.exam_holes()
-ex = CollimatorExplorer()
-ex.set(d=0.7, L=33.0, z=770.0, pitch=7.5, n_rings=5)
-with open(sys.argv[1], "wb") as f:
-    pickle.dump({"gone": gone, "data": dict(load()),
-                 "models": [collimator_model(*s) for s in settings],
-                 "labels": [pg.cascade_labels(4.0, 10), pg.cascade_labels(2.7, 7)],
-                 "resolution": [pg.shown_resolution(*s[:3]) for s in settings],
-                 "verdicts": pg.hole_verdicts(holes, 1.0, 40.0, 1000.0),
-                 "profile": pg.profile_curves(1.0, 40.0, 1000.0),
-                 "curves": pg.model_curves(holes, 1.0, 40.0, np.linspace(50.0, 3000.0, 24), 50.0),
-                 "readout": ex.readout.value, "results": ex.results}, f)
-from course_lib import spline_weights, splines
-from course_lib.plots import splines as plots
-from course_lib.widgets.splines import SplineEndExplorer, formulas_html
-gone = [n for n in ("catmull_rom_basis", "bspline_basis", "parameter_row", "end_rows",
-                    "end_derivatives", "phantom_point", "spline_eval", "sample_curve",
-                    "basis_matrix", "end_weights", "extend_with_phantoms", "segment_geometries",
-                    "evaluate_curve") if hasattr(splines, n)]
-arrays = [(m.__name__, k) for m in (splines, plots) for k, v in vars(m).items()
-          if isinstance(v, np.ndarray) and v.shape == (4, 4)]
-P = np.array(sys.argv[2:], dtype=float).reshape(-1, 2)
-scenes = {(kind, rule): plots.spline_scene(P, kind, rule, phantoms=P[:2], n_per_segment=8)
-          for kind in splines.KINDS for rule in (None, "d=b", "d=2c-b", "d=c", "free")}
-lines = [ln.get_ydata() for ln in plots.plot_blending_functions()]
-ex = SplineEndExplorer(P, kind="b-spline", rule="d=c")
-ex.rule.value = "free"
-with open(sys.argv[1], "wb") as f:
-    pickle.dump({"gone": gone, "arrays": arrays, "scenes": scenes, "lines": lines,
-                 "tables": {c: spline_weights.end_weights_text(*c) for c in
-                            [(k, r) for k in spline_weights.KINDS for r in spline_weights.RULES]},
-                 "formulas": formulas_html("catmull-rom", "d=b", ex.scene["end"]),
-                 "explorer": (ex.phantoms, ex.scene["end"])}, f)
-'''
-
-
-@pytest.mark.slow
-@pytest.mark.xdist_group("student_env")
-def test_students_q2_figures_are_the_instructors(tmp_path):
-    """In the students' environment: q2's routines give what they give in the instructors'
-    copy (the references inlined as C functions), the shipped results are the references' bit
-    for bit, the explorer reads out the same text, and the graded functions and their helpers
-    are absent from ``course_lib.gamma_camera``."""
-def test_students_q4_figures_are_the_instructors(tmp_path):
-    """In the students' environment: q4's curves, ends, blending functions and weight tables are
-    the instructors' ones (figures at display precision, 1e-4 of the points' span), while the
-    graded functions, their helpers and any 4 x 4 basis matrix are absent from the modules."""
     if shutil.which("gcc") is None:
         pytest.skip("no C compiler (make wheel-deps)")
     import pickle
 
-    import numpy as np
-    import studentenv
-
-    from course_lib import _clip_results_data, clipping
-    from course_lib.widgets.clipping import clip_display
-
-    rng = np.random.default_rng(6)
-    polygons = [clipping.EXAM_Q6["A"], np.array([[0.0, 0, 0, 0], [1, 0, 0.5, 1], [0, 1, 0.5, 1]])]
-    polygons += [np.c_[rng.uniform(-3, 3, (n, 3)), rng.uniform(-1, 3, (n, 1))] for n in (3, 5, 8)]
-    (tmp_path / "in.pkl").write_bytes(pickle.dumps(polygons))
-    out = tmp_path / "q6.pkl"
-    proc = studentenv.run(Q6_IN_STUDENT_ENV, str(out), str(tmp_path / "in.pkl"), cwd=tmp_path,
-                          timeout=600)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    got = pickle.loads(out.read_bytes())
-    assert got["gone"] == [] and got["polygons"] is False
-    ref = _clip_results_data.compute()
-    assert sorted(got["data"]) == sorted(ref)
-    for name, array in ref.items():
-        np.testing.assert_array_equal(got["data"][name], array, err_msg=name)
-    for P, theirs in zip(polygons, got["shown"]):
-        ours = clip_display(P)
-        assert theirs["tables"] == ours["tables"] and theirs["inside"] == ours["inside"]
-        assert (theirs["error"] is None) == (ours["error"] is None)
-        for key in ("steps", "screen"):
-            for a, b in zip(theirs[key], ours[key]):
-                np.testing.assert_array_equal(a, b)
-    assert "after plane 6 of 6, far" in got["status"] and "4 vertices" in got["status"]
-    drawn, want = got["drawn"][:-1], np.array([[0, 0.5], [0.5, 0.5], [0.5, 1], [0.25, 1]])
-    assert any(np.allclose(np.roll(drawn, k, axis=0), want, atol=1e-12) for k in range(4)), drawn
     import matplotlib
     import numpy as np
     import studentenv
@@ -456,6 +390,52 @@ def test_students_q4_figures_are_the_instructors(tmp_path):
     for name, v in want.items():
         np.testing.assert_array_equal(got["vectors"][name], v)
     assert got["angles"] == angles([1.0, -1.0, 1.0])
+
+
+Q2_SETTINGS = [(1.0, 40.0, 1000.0, 10.0, 4), (0.7, 33.0, 770.0, 7.5, 5), (2.3, 120.0, 260.0, 6.0, 8),
+               (0.4, 5.0, 3000.0, 2.0, 0), (3.1, 17.0, 90.0, 19.5, 2)]
+
+Q2_IN_STUDENT_ENV = r'''
+import pickle, sys
+import numpy as np
+from course_lib import collimator_results, gamma_camera
+from course_lib._collimator_results_data import load
+from course_lib.plots import gamma_camera as pg
+from course_lib.widgets.gamma_camera import CollimatorExplorer, collimator_model
+settings = SETTINGS
+gone = [n for n in ("pmt_gain", "collimator_resolution", "collimator_length_for_resolution",
+                    "ring_hole_positions", "open_fraction", "pmt_cascade", "exam_cutoff_radius",
+                    "exact_cutoff_radius", "transmission_profile", "compare_models")
+        if hasattr(gamma_camera, n)]
+holes = collimator_results.exam_holes()
+ex = CollimatorExplorer()
+ex.set(d=0.7, L=33.0, z=770.0, pitch=7.5, n_rings=5)
+with open(sys.argv[1], "wb") as f:
+    pickle.dump({"gone": gone, "data": dict(load()),
+                 "models": [collimator_model(*s) for s in settings],
+                 "labels": [pg.cascade_labels(4.0, 10), pg.cascade_labels(2.7, 7)],
+                 "resolution": [pg.shown_resolution(*s[:3]) for s in settings],
+                 "verdicts": pg.hole_verdicts(holes, 1.0, 40.0, 1000.0),
+                 "profile": pg.profile_curves(1.0, 40.0, 1000.0),
+                 "curves": pg.model_curves(holes, 1.0, 40.0, np.linspace(50.0, 3000.0, 24), 50.0),
+                 "readout": ex.readout.value, "results": ex.results}, f)
+'''
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("student_env")
+def test_students_q2_figures_are_the_instructors(tmp_path):
+    """In the students' environment: q2's routines give what they give in the instructors'
+    copy (the references inlined as C functions), the shipped results are the references' bit
+    for bit, the explorer reads out the same text, and the graded functions and their helpers
+    are absent from ``course_lib.gamma_camera``."""
+    if shutil.which("gcc") is None:
+        pytest.skip("no C compiler (make wheel-deps)")
+    import pickle
+
+    import numpy as np
+    import studentenv
+
     from course_lib import _collimator_results_data
     from course_lib.plots import gamma_camera as pg
     from course_lib.widgets import gamma_camera as wg
@@ -496,6 +476,52 @@ def test_students_q4_figures_are_the_instructors(tmp_path):
         assert got["readout"] == ours.readout.value
     finally:
         plt.close(ours.fig)
+
+
+Q4_IN_STUDENT_ENV = r'''
+import pickle, sys
+import numpy as np
+import matplotlib
+matplotlib.use("Agg")
+from course_lib import spline_weights, splines
+from course_lib.plots import splines as plots
+from course_lib.widgets.splines import SplineEndExplorer, formulas_html
+gone = [n for n in ("catmull_rom_basis", "bspline_basis", "parameter_row", "end_rows",
+                    "end_derivatives", "phantom_point", "spline_eval", "sample_curve",
+                    "basis_matrix", "end_weights", "extend_with_phantoms", "segment_geometries",
+                    "evaluate_curve") if hasattr(splines, n)]
+arrays = [(m.__name__, k) for m in (splines, plots) for k, v in vars(m).items()
+          if isinstance(v, np.ndarray) and v.shape == (4, 4)]
+P = np.array(sys.argv[2:], dtype=float).reshape(-1, 2)
+scenes = {(kind, rule): plots.spline_scene(P, kind, rule, phantoms=P[:2], n_per_segment=8)
+          for kind in splines.KINDS for rule in (None, "d=b", "d=2c-b", "d=c", "free")}
+lines = [ln.get_ydata() for ln in plots.plot_blending_functions()]
+ex = SplineEndExplorer(P, kind="b-spline", rule="d=c")
+ex.rule.value = "free"
+with open(sys.argv[1], "wb") as f:
+    pickle.dump({"gone": gone, "arrays": arrays, "scenes": scenes, "lines": lines,
+                 "tables": {c: spline_weights.end_weights_text(*c) for c in
+                            [(k, r) for k in spline_weights.KINDS for r in spline_weights.RULES]},
+                 "formulas": formulas_html("catmull-rom", "d=b", ex.scene["end"]),
+                 "explorer": (ex.phantoms, ex.scene["end"])}, f)
+'''
+
+
+@pytest.mark.slow
+@pytest.mark.xdist_group("student_env")
+def test_students_q4_figures_are_the_instructors(tmp_path):
+    """In the students' environment: q4's curves, ends, blending functions and weight tables are
+    the instructors' ones (figures at display precision, 1e-4 of the points' span), while the
+    graded functions, their helpers and any 4 x 4 basis matrix are absent from the modules."""
+    if shutil.which("gcc") is None:
+        pytest.skip("no C compiler (make wheel-deps)")
+    import pickle
+
+    import matplotlib
+    import numpy as np
+    import studentenv
+
+    matplotlib.use("Agg")
     from course_lib import spline_weights
     from course_lib import splines as S
     from course_lib.plots import splines as plots
