@@ -218,8 +218,10 @@ def _screen_data(label, value, counts):
         if exercise not in INDEXED or isinstance(value, (str, bytes)):
             continue
         _, indices = INDEXED[exercise]
-        size = (None if isinstance(value, dict) or (isinstance(value, np.ndarray) and value.ndim == 0)
-                else len(value))
+        try:
+            size = None if isinstance(value, dict) else len(value)
+        except TypeError:               # a float, a 0-d array: a constant only
+            continue
         for n_label, n in [(None, None)] + counts:
             if n is not None and (n is value or size is None or len(n) != size):
                 continue
