@@ -61,7 +61,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add("--reveal-hidden", action="store_true", help="after the deadline: show the failing "
         "hidden cases' inputs, expected and received values in the feedback")
     add("--secret-file", type=Path, default=None, help="the course secret that seeds the hidden "
-        "cases (default ~/.config/4f9/secret, created on first use; not once the course has "
+        "cases (default ~/.config/4f9/secret; created when missing, but not once the course has "
         "grades, unless --new-secret)")
     add("--new-secret", action="store_true", help="create a new course secret even though the "
         "course already has grades (their hidden cases change on re-grade)")

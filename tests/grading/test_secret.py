@@ -74,3 +74,21 @@ def test_an_empty_or_missing_gradebook_is_not_grades(tmp_path, home):
     assert _run(tmp_path, "--db-url", f"sqlite:///{tmp_path / 'empty.db'}") == 2
     assert home.is_file()
     assert not (tmp_path / "out" / "gradebook.db").exists()   # never created by the check
+
+
+def test_a_secret_file_named_on_the_command_line_follows_the_same_rule(tmp_path, home, capsys):
+    """``--secret-file`` at a path that does not exist yet: created for a course without
+    grades (or with ``--new-secret``), refused once the course has grades (a mistyped path
+    must not draw other hidden cases); the default secret is never touched."""
+    chosen = tmp_path / "elsewhere" / "secret"
+    assert _run(tmp_path, "--no-gradebook", "--secret-file", str(chosen)) == 2
+    assert chosen.is_file() and len(chosen.read_text().strip()) == 64
+    assert f"created the course secret {chosen}" in capsys.readouterr().err
+    chosen.unlink()
+    (tmp_path / "out" / "grades.csv").write_text("student\n", encoding="utf-8")
+    assert _run(tmp_path, "--no-gradebook", "--secret-file", str(chosen)) == 2
+    assert f"{chosen} does not exist, but this course already has grades" in \
+        capsys.readouterr().err
+    assert not chosen.exists()
+    assert _run(tmp_path, "--no-gradebook", "--secret-file", str(chosen), "--new-secret") == 2
+    assert chosen.is_file() and not home.exists()
