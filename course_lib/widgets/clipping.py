@@ -34,7 +34,7 @@ from ..plots.clipping import _closed, plot_clipping_2d, plot_view_volume, screen
 from ._slider_echoes import MOVE, STALE, SliderEchoes
 from ._view import FigureView, one_at_a_time, one_message_at_a_time
 
-#: A triangle that sticks out of the volume through four planes, w != 1 for two vertices.
+#: A quadrilateral that sticks out of the volume through four planes, w != 1 for two vertices.
 DEFAULT_POLYGON = np.array([
     [-1.5, -0.3, 0.5, 1.0],
     [1.2, -1.4, 0.3, 1.0],
