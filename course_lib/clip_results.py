@@ -3,7 +3,7 @@
 The figures and cells of the Q6 notebook that show the course's answers on fixed inputs read
 them here: triangles A and B of Q6(b) divided by ``w`` with their areas, A clipped (and its
 vertex count after each plane), the comb whose scanline has three spans and its ear
-clipping, a random star's ear clipping, the explorer's default triangle clipped and fanned
+clipping, a random star's ear clipping, the explorer's default polygon clipped and fanned
 (Q6(c)), and a square fanned into two triangles.
 
 The students' copy of the library holds these results, computed when it was built, and not the
