@@ -126,3 +126,14 @@ def test_a_promised_explanation_says_when_and_exists(path):
     for part in promised:
         missing = [name for name in items_by_part.get(part, []) if name not in found]
         assert not missing, f"{path.stem}: {missing} promised an explanation but have none"
+
+
+@pytest.mark.parametrize("name", CHOICES)
+def test_every_choice_item_has_an_explanation_for_its_feedback(name):
+    """Each notebook promises that every multiple-choice item's own explanation comes with the
+    feedback after the due date; that holds only if its source notebook has an explanation cell
+    naming it (the release leaves such cells out, so reading on gives nothing away)."""
+    path = next(p for p in NOTEBOOKS if p.stem == REGISTRY[name].notebook)
+    texts = explanations.of_notebook(path).get(name, [])
+    assert any(t.strip() for t in texts), \
+        f"{name}: no explanation cell in {path.name} (its explanation is missing, or still in the release)"
