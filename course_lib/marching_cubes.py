@@ -809,7 +809,8 @@ def alternative_triangulation(index) -> np.ndarray:
     index = _case_index(index)
     if not ambiguous_faces(index):
         raise ValueError(f"case {index} has no ambiguous face: it has only one triangulation")
-    return _mc_tables.ALT_TRI_TABLE[index, :_mc_tables.ALT_N_TRIANGLES[index]].copy()
+    table, count = _mc_tables.ALT_TRI_TABLE, _mc_tables.ALT_N_TRIANGLES
+    return table[index, :count[index]].copy()
 
 
 def probe_triangulation(index, triangles):
