@@ -131,7 +131,7 @@ PYTEST := $(BIN)/python -m pytest -p no:nbmake
 
 ## test: the whole suite (library, notebooks, grading bank, browser): 15 minutes measured on 2 quiet cores
 test: $(STAMP) browser-deps a11y-deps sandbox-deps wheel-deps postgres-deps hub-deps mathjax-deps
-	@echo "make test: the whole suite, about 25 minutes on a fresh clone on 2 cores, the real hub's term and 30-user burst included (one dot per test; make test-fast: about 1 minute)"
+	@echo "make test: the whole suite, about 30 minutes on a fresh clone on 2 cores, the real hub's term and 30-user burst and the students' wheel probe included (one dot per test; make test-fast: about 1 minute)"
 	$(PYTEST) -n 2 --dist loadgroup -q
 
 ## test-fast: the library against its oracles, the judging, the notebooks' contract and their

@@ -288,7 +288,7 @@ def _factories(module):
             continue
         yield f"{module.__name__}.{name}()", obj
 
-objects, made = 0, set()
+objects, made, alive = 0, set(), []
 started = time.monotonic()
 for module in modules:
     for label, factory in _factories(module):
@@ -305,7 +305,8 @@ for module in modules:
                 data.append((qual, v))
             elif callable(v) and not inspect.isclass(v) and id(v) not in seen:
                 seen.add(id(v))
-                _try(qual, v)
+                alive.append(v)     # a bound method is made anew on each access: kept alive,
+                _try(qual, v)       # its id cannot be reused by the next object's method
         if plt is not None:
             plt.close("all")
 
