@@ -41,6 +41,16 @@ _spec = importlib.util.spec_from_file_location("_tests_startup", STARTUP / "site
 _spec.loader.exec_module(importlib.util.module_from_spec(_spec))
 
 os.environ["MPLBACKEND"] = "Agg"
+
+# Property tests judge values, never speed: hypothesis's default 200 ms deadline per example
+# fails on a loaded 2-core machine (benchmarks/ holds the speed targets).
+try:
+    from hypothesis import settings as _hypothesis_settings
+except ImportError:  # pragma: no cover - hypothesis is a test dependency
+    pass
+else:
+    _hypothesis_settings.register_profile("course", deadline=None)
+    _hypothesis_settings.load_profile("course")
 #: a fresh course root's release and gradebook (nbgrader's generate_assignment, about 400 SQLite
 #: commits) are copied from here after the first (autograder/release_cache.py)
 os.environ.setdefault("AUTOGRADER_COURSE_CACHE", str(REPO_ROOT / ".cache" / "course-release"))
