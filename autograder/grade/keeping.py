@@ -42,15 +42,16 @@ SHOWN_EXCEPTIONS = frozenset(
     + ["LinAlgError", "AxisError"])
 
 
-def withheld_reason(verdict: Verdict, outcome: CaseOutcome, raises: type | None) -> str:
+def withheld_reason(verdict: Verdict, outcome: CaseOutcome, raises: type | None) -> str | None:
     """A case's reason with nothing of the sandbox's text, for a job that held hidden inputs
     before the deadline (``None``: keep the grader's own reason).
 
-    Every text a case record carries (an exception's message and name, a timeout's or a
+    A text a worker's record carries (an exception's message and name, a timeout's or a
     rejection's message) comes from the student's process, which may write anything there,
     e.g. the inputs another name's worker saw: so it says only what the grader itself knows,
     the verdict and a well-known exception's type. A returned value's reason is the grader's
-    (its values are shown only in the expected answer's form)."""
+    (its values are shown only in the expected answer's form), and so are the messages of the
+    grader's decoder and the supervisor (``said_by_student`` False)."""
     if outcome.kind is OutcomeKind.RETURNED or verdict is Verdict.PASS:
         return None
     if outcome.kind is OutcomeKind.RAISED and verdict is Verdict.ERROR:
@@ -58,8 +59,8 @@ def withheld_reason(verdict: Verdict, outcome: CaseOutcome, raises: type | None)
             "an exception of its own class"
         instead = f" instead of {raises.__name__}" if raises is not None else ""
         return f"raised {name}{instead} (its message: {HIDDEN_OUTPUT})"
-    if verdict is Verdict.UNANSWERED:
-        return None                         # the grader's own words (NotImplementedError)
+    if verdict is Verdict.UNANSWERED or not outcome.said_by_student:
+        return None                         # the grader's or the supervisor's own words
     return VERDICT_WORDS[verdict]
 
 

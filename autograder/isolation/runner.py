@@ -24,7 +24,7 @@ from autograder.model import CaseOutcome, NameRun, OutcomeKind
 
 from . import allowlist, bwrap, seccomp
 from .inside import wire
-from .inside.supervisor import GRACE, name_budget
+from .inside.supervisor import GRACE, SUPERVISOR, name_budget
 from .cgroup import JobCgroup
 from .identity import allocate_uid
 from .jobs import Limits, NotebookJob, validate_job
@@ -95,19 +95,20 @@ class NameState:
         seconds = float(seconds) if type(seconds) in (int, float) and 0 <= seconds < 1e6 else 0.0
         out = CaseOutcome(i, OutcomeKind.REJECTED, seconds=seconds,
                           printed=_text(rec.get("printed"), self.limits.output_bytes + 100),
-                          message=_text(rec.get("message"), NOTE_CHARS))
+                          message=_text(rec.get("message"), NOTE_CHARS),
+                          said_by_student=rec.get("by") != SUPERVISOR)
         kinds = {k.value: k for k in OutcomeKind}
         kind = kinds.get(rec.get("kind")) if type(rec.get("kind")) is str else None
         if size > wire.record_cap(case.result_cap, self.limits.output_bytes):
-            out.message = "result too large"
+            out.message, out.said_by_student = "result too large", False
         elif kind is None:
-            out.message = "unrecognised result"
+            out.message, out.said_by_student = "unrecognised result", False
         elif kind is OutcomeKind.RETURNED:
             try:
                 out.value = wire.decode_value(rec.get("value"), wire.Budget(case.result_cap))
                 out.kind, out.message = kind, ""
             except wire.BadValue as exc:
-                out.message = str(exc)
+                out.message, out.said_by_student = str(exc), False     # the grader's words
         else:
             out.kind = kind
             if kind is OutcomeKind.RAISED:

@@ -539,6 +539,41 @@ def test_time_limits_and_crashes(mode):
     assert kinds(runs["top"]) == [K.NOT_RUN]
 
 
+FORGER = """
+import sys
+def _forged(value, cap):
+    return FORGED
+for _module in list(sys.modules.values()):      # the worker's own encoder, in this process
+    if "_encode_result" in getattr(_module, "__dict__", {}):
+        _module._encode_result = _forged
+def NAME(k):
+    if k == 1:                                  # the supervisor's own timeout
+        import signal
+        signal.signal(signal.SIGALRM, signal.SIG_IGN)
+        while True:
+            pass
+    return k
+"""
+
+
+def test_only_the_supervisors_records_are_marked_as_its_words(mode):
+    """A worker's record (which student code may rewrite) is ``said_by_student``, whatever kind
+    it claims; a record that claims to be the supervisor's is refused by the supervisor."""
+    plain = FORGER.replace("FORGED", "{'kind': 'timeout', 'message': 'FORGED'}")
+    claims = FORGER.replace("FORGED", "{'kind': 'timeout', 'message': 'FORGED', "
+                                      "'by': 'supervisor'}")
+    runs = run(mode, fn("plain", plain.replace("NAME", "plain"), cases=[(0,), (1,)]),
+               fn("claims", claims.replace("NAME", "claims"), cases=[(0,)]),
+               limits=Limits(case_timeout=1.0, load_timeout=10.0))
+    forged, real = runs["plain"].outcomes
+    assert (forged.kind, forged.message, forged.said_by_student) == (K.TIMEOUT, "FORGED", True)
+    assert real.kind is K.TIMEOUT and not real.said_by_student
+    assert "stopped by the supervisor" in real.message
+    refused = runs["claims"].outcomes[0]
+    assert refused.kind is K.REJECTED and not refused.said_by_student
+    assert "FORGED" not in refused.message
+
+
 GRADER_RSS = """
 import json, resource, sys
 import numpy as np
