@@ -150,3 +150,23 @@ def test_every_case_record_gives_its_case_an_outcome(records, size):
         for text in (o.message, o.printed, o.error_type, *o.error_mro):
             text.encode("utf-8")
         _assert_writable(o.value)
+
+
+ANY_RECORD = st.fixed_dictionaries(
+    {"t": st.one_of(st.sampled_from(["done", "note", "name", "loaded", "case", "end"]), SCALARS),
+     "name": st.one_of(st.just("f"), SCALARS)},
+    optional={**RECORD_FIELDS, "text": SCALARS, "defined": SCALARS, "launches": INTS,
+              "by": SCALARS})
+
+
+@given(st.lists(ANY_RECORD, max_size=8))
+def test_the_collector_takes_any_stream_of_records(records):
+    """Whatever records arrive, in whatever order, the results are one outcome per case."""
+    collector = _collector()
+    for rec in records:
+        collector.take(rec, b"{}")
+    run = collector.results("eof")["f"]
+    assert [o.index for o in run.outcomes] == [0, 1, 2]
+    assert 1 <= run.launches <= Limits().max_launches
+    for text in [run.printed, *run.load_notes]:
+        text.encode("utf-8")
