@@ -154,6 +154,9 @@ class CaseOutcome:
     message: str = ""               #: capped exception text, or why the case did not run
     seconds: float = 0.0
     printed: str = ""               #: stdout/stderr written while the case ran (capped)
+    #: the message and error type came from the student's process (a worker's record, which
+    #: student code may rewrite), not from the grader or the sandbox's supervisor
+    said_by_student: bool = False
 
 
 @dataclass

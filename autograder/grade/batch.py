@@ -359,6 +359,8 @@ def _records(ex, drawn: list[DrawnCase], run: NameRun, show: bool = True,
         verdict, reason = judging.judge_case(ex, d.case, d.expected, outcome)
         if verdict is Verdict.REFERENCE_USED and not (show or d.case.visible):
             reason = f"used {OFF_LIMITS}"
+        elif not show:
+            reason = keeping.withheld_reason(verdict, outcome, d.case.raises) or reason
         # a value is shown only in the answer's own form: no text or other shape can carry
         # anything onto the feedback page
         returned = verdict in (Verdict.PASS, Verdict.WRONG_VALUE, Verdict.WRONG_SHAPE)

@@ -24,7 +24,7 @@ from autograder.model import CaseOutcome, NameRun, OutcomeKind
 
 from . import allowlist, bwrap, seccomp
 from .inside import wire
-from .inside.supervisor import GRACE, name_budget
+from .inside.supervisor import GRACE, SUPERVISOR, name_budget
 from .cgroup import JobCgroup
 from .identity import allocate_uid
 from .jobs import Limits, NotebookJob, validate_job
@@ -60,8 +60,10 @@ def job_budget(job: NotebookJob, limits: Limits) -> float:
 
 
 def _text(value, cap: int) -> str:
+    """A text field of a record: ``""`` unless a str, at most ``cap`` characters, valid UTF-8
+    (JSON carries lone surrogates, which no page, log or CSV could write)."""
     text = value if type(value) is str else ""
-    return text if len(text) <= cap else text[:cap] + "..."
+    return wire.plain_text(text if len(text) <= cap else text[:cap] + "...")
 
 
 class NameState:
@@ -76,27 +78,37 @@ class NameState:
         self.started = self.ended = 0.0
 
     def take_case(self, rec: dict, size: int) -> None:
+        """Case ``rec["i"]``'s outcome from its record; never raises for the record's content
+        (a field that cannot be read makes the case ``rejected``, never the grader's error)."""
         i = rec.get("i")
         if type(i) is not int or not 0 <= i < len(self.nj.cases) or i in self.outcomes:
             return
+        try:
+            self.outcomes[i] = self._outcome(i, rec, size)
+        except Exception:  # noqa: BLE001 - the record is hostile data: its case, not the grader
+            self.outcomes[i] = CaseOutcome(i, OutcomeKind.REJECTED,
+                                           message="unrecognised result")
+
+    def _outcome(self, i: int, rec: dict, size: int) -> CaseOutcome:
         case = self.nj.cases[i]
         seconds = rec.get("seconds")
         seconds = float(seconds) if type(seconds) in (int, float) and 0 <= seconds < 1e6 else 0.0
         out = CaseOutcome(i, OutcomeKind.REJECTED, seconds=seconds,
                           printed=_text(rec.get("printed"), self.limits.output_bytes + 100),
-                          message=_text(rec.get("message"), NOTE_CHARS))
+                          message=_text(rec.get("message"), NOTE_CHARS),
+                          said_by_student=rec.get("by") != SUPERVISOR)
         kinds = {k.value: k for k in OutcomeKind}
         kind = kinds.get(rec.get("kind")) if type(rec.get("kind")) is str else None
         if size > wire.record_cap(case.result_cap, self.limits.output_bytes):
-            out.message = "result too large"
+            out.message, out.said_by_student = "result too large", False
         elif kind is None:
-            out.message = "unrecognised result"
+            out.message, out.said_by_student = "unrecognised result", False
         elif kind is OutcomeKind.RETURNED:
             try:
                 out.value = wire.decode_value(rec.get("value"), wire.Budget(case.result_cap))
                 out.kind, out.message = kind, ""
             except wire.BadValue as exc:
-                out.message = str(exc)
+                out.message, out.said_by_student = str(exc), False     # the grader's words
         else:
             out.kind = kind
             if kind is OutcomeKind.RAISED:
@@ -104,7 +116,7 @@ class NameState:
                 out.error_type = _text(rec.get("etype"), 200)
                 out.error_mro = tuple(_text(m, 200) for m in mro[:20]) \
                     if type(mro) is list else ()
-        self.outcomes[i] = out
+        return out
 
     def result(self, ending: str, setup_notes: list[str]) -> NameRun:
         kind, message = ENDINGS.get(ending, ENDINGS["eof"])
@@ -183,9 +195,11 @@ def _job_document(job: NotebookJob, limits: Limits, privileged: bool, bpf: bytes
 
 def _job_contents(job: NotebookJob, limits: Limits, privileged: bool, bpf: bytes = b"",
                   scratch: str = "") -> tuple[dict, bytes]:
-    """``(document, cases)``: the job document, which holds no case's inputs, and the cases
-    file, every case's inputs as one wire frame (``{"t": "case", "i", "args", "kwargs"}``)
-    at the ``at``/``len`` its entry in the document gives.
+    """``(document, cases)``: the job document, which holds no case's inputs nor anything that
+    tells one case from another (no offsets, no lengths: a hidden case's size would describe
+    it to the student code that can read the document), and the cases file, every case's
+    inputs as one wire frame (``{"t": "case", "i", "args", "kwargs"}``), the names' cases one
+    after another in the document's order (:class:`~.inside.wire.CaseStream`).
 
     The cases file never appears in the sandbox's filesystem: the supervisor reads each case
     from an inherited descriptor when it is due and hands it to the worker, so the process that
@@ -202,7 +216,7 @@ def _job_contents(job: NotebookJob, limits: Limits, privileged: bool, bpf: bytes
                 raise ValueError(f"job.names[{k}].cases[{i}] holds {exc}, not plain "
                                  "data") from None
             data = wire.frame({"t": "case", "i": i, "args": args, "kwargs": kwargs})
-            cases.append({"cap": case.result_cap, "at": len(blob), "len": len(data)})
+            cases.append({"cap": case.result_cap})
             blob += data
         names.append({"name": nj.name, "kind": nj.kind, "cells": [list(c) for c in nj.cells],
                       "cases": cases})

@@ -15,6 +15,10 @@ every thread and process it makes). The filter refuses
 - state that outlives the job or reaches other processes: the keyring calls (keyrings are not
   namespaced, so a key added under the job's uid would wait for the next job of that uid),
   ``ptrace``, ``process_vm_readv``/``writev``, ``pidfd_getfd``, ``kcmp``;
+- System V IPC (message queues, semaphores, shared memory) and POSIX message queues: the
+  workers of one job share the sandbox's IPC namespace, so one name's worker could leave its
+  hidden inputs in a queue for a later name's worker, whose visible case would carry them onto
+  the page (the scratch folder is emptied between names; an IPC object would not be);
 - new namespaces (user namespaces are off inside the sandbox): ``unshare``, ``setns``, and
   ``clone`` with any ``CLONE_NEW*`` bit; ``clone3`` answers ``ENOSYS`` (its flags are in memory
   a filter cannot read), so glibc falls back to ``clone``, as Docker does;
@@ -54,6 +58,10 @@ REFUSED = (
     "modify_ldt",
     # the kernel keyrings (not namespaced: a key would outlive the job)
     "add_key", "keyctl", "request_key",
+    # System V IPC and POSIX message queues: shared by the job's workers, outliving each one
+    "msgget", "msgsnd", "msgrcv", "msgctl", "semget", "semop", "semtimedop", "semctl",
+    "shmget", "shmdt", "shmctl", "mq_open", "mq_unlink", "mq_timedsend", "mq_timedreceive",
+    "mq_notify", "mq_getsetattr", "ipc",
     # other processes' memory
     "ptrace", "process_vm_readv", "process_vm_writev", "pidfd_getfd", "kcmp",
     "process_madvise",

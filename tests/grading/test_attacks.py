@@ -280,6 +280,73 @@ def test_a_returned_string_is_described_not_shown(leak):
 
 
 # --------------------------------------------------------------------------------------------
+# one name's worker posts every input it sees (hidden ones last) to a System V message queue; a
+# later name's first visible cases raise with what they read there, as the message and as the
+# exception's class name (issue 33, finding 5)
+
+
+def _long_numbers(cases) -> set[str]:
+    """The reprs of the cases' input numbers long enough to be a random draw's digits."""
+    found = set()
+    for case in cases:
+        for value in [*case.args, *case.kwargs.values()]:
+            try:
+                got = np.asarray(value, dtype=float).ravel()
+            except (TypeError, ValueError):
+                continue
+            found |= {repr(float(x)) for x in got if len(repr(float(x))) >= 8}
+    return found
+
+
+@pytest.fixture(scope="module")
+def queue(tmp_path_factory):
+    src = SOURCES.get("q5_phong")
+    if src is None:
+        pytest.skip("q5_phong is not in the course")
+    root = tmp_path_factory.mktemp("queue")
+    (root / "secret").write_bytes(SECRET + b"\n")
+    nb = model_version(src)
+    append_cell(nb, "normalize", payload("queue_post.txt"))
+    append_cell(nb, "phong", payload("queue_read.txt"))
+    path = root / "submitted" / "rt_queue" / "tripos2006" / "q5_phong.ipynb"
+    write_nb(path, nb)
+    pages, outputs = {}, {}
+    for out, extra in (("before", ()), ("after", ("--reveal-hidden",))):
+        proc = run_grade(root / "submitted", root / out, "--no-gradebook", *extra,
+                         secret_file=root / "secret")
+        pages[out] = html.unescape((root / out / "feedback" / "rt_queue" / "q5_phong.html")
+                                   .read_text("utf-8"))
+        outputs[out] = [p.read_text("utf-8", "replace") for p in (root / out).rglob("*")
+                        if p.is_file()] + [proc.stdout, proc.stderr]
+    cases = cases_of("rt_queue", "normalize", path)     # as submitted (its items typed)
+    hidden = (_long_numbers([c for c in cases if not c.visible])
+              - _long_numbers([c for c in cases if c.visible]))
+    return {"pages": pages, "outputs": outputs, "hidden": hidden, "src": src,
+            "rows": read_grades(root / "before")}
+
+
+def test_no_queue_carries_hidden_inputs_to_the_page(queue):
+    assert queue["hidden"], "normalize has hidden cases with random inputs"
+    for text in queue["outputs"]["before"] + queue["outputs"]["after"]:
+        shown = sorted(h for h in queue["hidden"] if h in text)
+        assert not shown, f"hidden inputs {shown[:5]} reached an output"
+    # the poster's cell ran in every worker and normalize is graded as the model answer
+    row = queue["rows"][("rt_queue", "q5_phong", "test_normalize")]
+    assert row["status"] == "ok", row["message"]
+
+
+def test_before_the_deadline_a_visible_case_shows_an_exceptions_type_only(queue):
+    before, after = (re.sub(r"<details class='code'>.*?</details>", "", queue["pages"][k],
+                            flags=re.S) for k in ("before", "after"))
+    assert "raised TypeError" in before and "QUEUE" not in before
+    assert "an exception of its own class" in before
+    row = queue["rows"][("rt_queue", "q5_phong", "test_phong")]
+    assert row["status"] == "error" and "QUEUE" not in row["message"]
+    # after the deadline the message is shown as before: the attack ran, the queue was empty
+    assert "QUEUE-MARK EMPTY" in after and "QUEUE_EMPTY" in after
+
+
+# --------------------------------------------------------------------------------------------
 # the lookup table behind a helper in ANOTHER cell; the sandbox's /job printed at load time:
 # the phong cell itself never changes
 

@@ -9,6 +9,7 @@ import os
 import socket
 import subprocess
 import sys
+import tempfile
 import textwrap
 import threading
 import time
@@ -538,6 +539,41 @@ def test_time_limits_and_crashes(mode):
     assert kinds(runs["top"]) == [K.NOT_RUN]
 
 
+FORGER = """
+import sys
+def _forged(value, cap):
+    return FORGED
+for _module in list(sys.modules.values()):      # the worker's own encoder, in this process
+    if "_encode_result" in getattr(_module, "__dict__", {}):
+        _module._encode_result = _forged
+def NAME(k):
+    if k == 1:                                  # the supervisor's own timeout
+        import signal
+        signal.signal(signal.SIGALRM, signal.SIG_IGN)
+        while True:
+            pass
+    return k
+"""
+
+
+def test_only_the_supervisors_records_are_marked_as_its_words(mode):
+    """A worker's record (which student code may rewrite) is ``said_by_student``, whatever kind
+    it claims; a record that claims to be the supervisor's is refused by the supervisor."""
+    plain = FORGER.replace("FORGED", "{'kind': 'timeout', 'message': 'FORGED'}")
+    claims = FORGER.replace("FORGED", "{'kind': 'timeout', 'message': 'FORGED', "
+                                      "'by': 'supervisor'}")
+    runs = run(mode, fn("plain", plain.replace("NAME", "plain"), cases=[(0,), (1,)]),
+               fn("claims", claims.replace("NAME", "claims"), cases=[(0,)]),
+               limits=Limits(case_timeout=1.0, load_timeout=10.0))
+    forged, real = runs["plain"].outcomes
+    assert (forged.kind, forged.message, forged.said_by_student) == (K.TIMEOUT, "FORGED", True)
+    assert real.kind is K.TIMEOUT and not real.said_by_student
+    assert "stopped by the supervisor" in real.message
+    refused = runs["claims"].outcomes[0]
+    assert refused.kind is K.REJECTED and not refused.said_by_student
+    assert "FORGED" not in refused.message
+
+
 GRADER_RSS = """
 import json, resource, sys
 import numpy as np
@@ -844,18 +880,41 @@ def test_a_worker_holds_no_other_case_than_its_own(mode):
 
 
 def test_the_job_document_holds_no_case_inputs():
-    """The file bound into the sandbox says where each case is, never what it is: the inputs
-    are frames of the cases file, which only the supervisor's descriptor reaches."""
+    """The file bound into the sandbox holds no case's inputs: they are the frames of the cases
+    file, one after another, which only the supervisor's descriptor reaches."""
     from autograder.isolation import runner
 
     job = NotebookJob("j", SETUP, [fn("f", "def f(x):\n    return x\n",
-                                      cases=[(0.123456789,), (np.array([9.87654321]),)])])
+                                      cases=[(0.123456789,), (np.array([9.87654321]),)]),
+                                   fn("g", "def g(x):\n    return x\n", cases=[(7.5,)])])
     doc, cases = runner._job_contents(job, Limits(), False)
     assert "0.123456789" not in json.dumps(doc) and "args" not in json.dumps(doc)
-    got = []
-    for entry in doc["names"][0]["cases"]:
-        data = cases[entry["at"]:entry["at"] + entry["len"]]
-        rec = json.loads(data[wire.FRAME.size:])
-        assert wire.FRAME.unpack_from(data)[0] == entry["len"] - wire.FRAME.size
-        got.append(wire.decode_value(rec["args"], wire.Budget(1 << 20)))
-    assert got[0] == (0.123456789,) and got[1][0].tolist() == [9.87654321]
+    with tempfile.TemporaryFile() as f:
+        f.write(cases)
+        f.flush()
+        stream = wire.CaseStream(f.fileno())
+        # the g's case is frame 2; a name's cases never read are passed over
+        got = [stream.read(0), stream.read(2), stream.read(1), stream.read(3)]
+    rec = [json.loads(bytes(b[wire.FRAME.size:])) for b in got[:2]]
+    assert wire.decode_value(rec[0]["args"], wire.Budget(1 << 20)) == (0.123456789,)
+    assert wire.decode_value(rec[1]["args"], wire.Budget(1 << 20)) == (7.5,)
+    assert got[2] == got[3] == bytearray(), "read already, or no such case"
+
+
+JOB_READER = "def NAME(x):\n    with open('/job') as f:\n        return f.read()\n"
+
+
+def test_the_job_file_the_sandbox_sees_does_not_tell_cases_apart(mode):
+    """Student code reads ``/job``: it must not tell a hidden case from another (no offsets or
+    byte lengths, which would tell how large each hidden input is). Two jobs whose cases differ
+    only in their inputs' sizes show the sandbox the same job file."""
+    seen = []
+    for size in (1, 600):
+        cases = [(np.zeros(1),), (np.zeros(size),), (np.zeros(3),)]
+        runs = run(mode, fn("early", JOB_READER.replace("NAME", "early"), cases=cases),
+                   fn("late", JOB_READER.replace("NAME", "late"), cases=cases))
+        docs = [o.value for name in ("early", "late") for o in runs[name].outcomes]
+        assert all(type(d) is str for d in docs), docs
+        seen.append(json.loads(docs[0]))
+    assert [len(n["cases"]) for n in seen[0]["names"]] == [3, 3]
+    assert seen[0] == seen[1]

@@ -193,6 +193,42 @@ def test_a_refused_import_blames_only_the_cases_that_need_it(mode):
     assert "NameError" in out.outcomes[1].message
 
 
+#: One name's worker posts its inputs (a hidden case's, say) to a System V message queue; a
+#: later name's worker (a visible case, whose value and message reach the page) reads them.
+IPC_POST = LIBC + """
+        def ipc_post(secret):
+            qid = libc.msgget(0x33, 0o1600)                      # a fixed key, IPC_CREAT | 0600
+            if qid < 0:
+                raise OSError(ctypes.get_errno(), os.strerror(ctypes.get_errno()))
+            msg = ctypes.create_string_buffer(8 + 64)
+            data = (1).to_bytes(8, "little") + secret.encode()
+            ctypes.memmove(ctypes.addressof(msg), data, len(data))
+            if libc.msgsnd(qid, msg, 64, 0) != 0:
+                raise OSError(ctypes.get_errno(), os.strerror(ctypes.get_errno()))
+            return "posted"
+"""
+IPC_READ = LIBC + """
+        def ipc_read():
+            qid = libc.msgget(0x33, 0o600)
+            if qid < 0:
+                raise OSError(ctypes.get_errno(), os.strerror(ctypes.get_errno()))
+            msg = ctypes.create_string_buffer(8 + 64)
+            n = libc.msgrcv(qid, msg, 64, 0, 0o4000)             # IPC_NOWAIT
+            if n < 0:
+                raise OSError(ctypes.get_errno(), os.strerror(ctypes.get_errno()))
+            return msg.raw[8:8 + n].rstrip(b"\\0").decode()
+"""
+
+
+def test_workers_of_one_job_share_no_message_queue(mode):
+    """Finding 5 of issue 33: the System V queue is refused, so nothing one name's worker saw
+    reaches a later name's."""
+    runs = run(mode, fn("ipc_post", IPC_POST, cases=[("HIDDEN-4.25",)]), fn("ipc_read", IPC_READ))
+    post, read = runs["ipc_post"].outcomes[0], runs["ipc_read"].outcomes[0]
+    assert post.kind is K.REJECTED_CODE and read.kind is K.REJECTED_CODE, (post, read)
+    assert all("HIDDEN" not in repr([o.value, o.message, o.printed]) for o in (post, read))
+
+
 def test_unshare_in_a_forked_child_is_refused_too(mode):
     """The filter is inherited: a child process gets exit code 99 (``execve`` refused), not
     ``unshare``'s 0."""
@@ -305,6 +341,10 @@ out = {
     "personality": call(135, 0x0400000),
     "io_uring_setup": call(425, 1, 0),
     "modify_ldt": call(154, 1, ctypes.c_void_p(rw), 16),
+    "msgget": call(68, 0, 0o1600),                 # IPC_PRIVATE, IPC_CREAT | 0600
+    "semget": call(64, 0, 1, 0o1600),
+    "shmget": call(29, 0, 4096, 0o1600),
+    "mq_open": call(240, b"q", 0o100 | 2, 0o600, 0),   # O_CREAT | O_RDWR
     "i386_getpid": int80(),
 }
 threads = [threading.Thread(target=lambda: None) for _ in range(3)]
@@ -330,7 +370,8 @@ def test_filter_refuses_other_abis_namespaces_and_exec_memory():
     out = json.loads(done.stdout)
     eperm = [-1, errno.EPERM]
     for name in ("x32_getpid", "clone_newuser", "clone_newnet", "mprotect_exec", "ptrace", "bpf",
-                 "personality", "io_uring_setup", "modify_ldt"):
+                 "personality", "io_uring_setup", "modify_ldt", "msgget", "semget", "shmget",
+                 "mq_open"):
         assert out[name] == eperm, (name, out[name])
     assert out["clone3"] == [-1, errno.ENOSYS]        # glibc falls back to clone
     assert out["mprotect_rw"] == [0, 0]

@@ -27,7 +27,7 @@ from .confine import (PR_SET_DUMPABLE, PR_SET_PDEATHSIG, preload, prctl, seccomp
                       set_rlimits)
 from .failures import Policy, exc_name, safe_str
 from .supervisor import NameSupervisor
-from .wire import frame, write_all
+from .wire import CaseStream, frame, write_all
 from .worker import Capture, CaseTimeout
 
 
@@ -108,9 +108,11 @@ def main(argv: list) -> None:
     import gc
 
     gc.freeze()   # what the workers inherit is never collected there: no copy-on-write storm
+    cases, first = CaseStream(cases_fd), 0
     for nj in job["names"]:
-        NameSupervisor(nj, ns, limits, policy, (channel, cases_fd), job_deadline, bpf,
-                       str(job.get("scratch") or "")).run()
+        NameSupervisor(nj, ns, limits, policy, (channel, cases), job_deadline, bpf,
+                       str(job.get("scratch") or ""), first).run()
+        first += len(nj["cases"])
     write_all(channel, frame({"t": "done"}))
     os._exit(0)
 

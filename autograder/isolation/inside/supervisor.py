@@ -23,11 +23,14 @@ import signal
 import time
 
 from .failures import Policy, describe_status
-from .wire import FrameReader, frame, record_cap, write_all
+from .wire import CaseStream, FrameReader, frame, record_cap, write_all
 from .worker import worker_main
 
 GRACE = 1.0                        #: seconds the supervisor waits beyond a worker's own alarm
 TIMEOUTS_IN_A_ROW = 3              #: after this many timeouts the rest of a name is not run
+#: The ``by`` of a case record the supervisor made (a worker's record with a ``by`` is refused),
+#: so the grader knows which messages no student code wrote.
+SUPERVISOR = "supervisor"
 
 
 def name_budget(limits: dict, n_cases: int) -> float:
@@ -103,14 +106,15 @@ class NameSupervisor:
     """Runs one graded name: launches workers, feeds them its cases one at a time, forwards
     their records, fills in the cases a dead or hung worker could not report.
 
-    ``fds``: the channel to the grader and the cases file (each case's frame at the ``at`` and
-    ``len`` of its entry in ``nj["cases"]``); ``scratch``: the folder emptied before each
-    name's first worker starts."""
+    ``io``: the channel to the grader and the cases file (this name's case ``i`` is its frame
+    ``first + i``); ``scratch``: the folder emptied before each name's first worker starts."""
 
-    def __init__(self, nj: dict, ns: dict, limits: dict, policy: Policy, fds: tuple[int, int],
-                 job_deadline: float = float("inf"), bpf: bytes = b"", scratch: str = ""):
+    def __init__(self, nj: dict, ns: dict, limits: dict, policy: Policy,
+                 io: tuple[int, CaseStream], job_deadline: float = float("inf"),
+                 bpf: bytes = b"", scratch: str = "", first: int = 0):
         self.nj, self.ns, self.limits = nj, ns, limits
-        self.channel, self.cases_fd = fds
+        self.channel, self.cases = io
+        self.first = first
         self.scratch = scratch
         self.feed_fd = -1          #: the write end of the current worker's case pipe
         self.policy = policy       #: the grader's allow-list of course_lib, for the workers
@@ -134,7 +138,7 @@ class NameSupervisor:
     def settle(self, kind: str, message: str, seconds: float = 0.0) -> None:
         """Give case ``self.next`` an outcome of the supervisor's own."""
         self.emit({"t": "case", "i": self.next, "kind": kind, "message": message,
-                   "seconds": seconds})
+                   "seconds": seconds, "by": SUPERVISOR})
         self.timeouts = self.timeouts + 1 if kind == "timeout" else 0
         self.next += 1
 
@@ -176,7 +180,7 @@ class NameSupervisor:
             return False
         if pid == 0:   # the worker: never returns into the supervisor's code
             try:
-                for fd in (rfd, cwfd, self.channel, self.cases_fd):
+                for fd in (rfd, cwfd, self.channel, self.cases.fd):
                     os.close(fd)
                 worker_main(self.nj, self.ns, self.limits, self.policy, (crfd, wfd), self.bpf)
             finally:
@@ -205,11 +209,9 @@ class NameSupervisor:
         if self.next >= self.n:
             self.end_feed()
             return True
-        entry = self.nj["cases"][self.next]
-        buf = bytearray(int(entry["len"]))
+        buf = self.cases.read(self.first + self.next)
         try:
-            got = os.preadv(self.cases_fd, [buf], int(entry["at"]))
-            return self._write_by(buf, got, deadline)
+            return self._write_by(buf, len(buf), deadline)
         finally:
             buf[:] = bytes(len(buf))
 
@@ -275,7 +277,7 @@ class NameSupervisor:
                     return self.failed("timeout", loading, started)
             elif t == "start" and not loading and rec.get("i") == self.next:
                 pass      # harmless: the case's deadline was fixed when it was handed over
-            elif t == "case" and not loading and rec.get("i") == self.next:
+            elif t == "case" and not loading and rec.get("i") == self.next and "by" not in rec:
                 if not self.forward_case(rec, raw):
                     return False
                 started, deadline = now, self.case_deadline(self.next, now)

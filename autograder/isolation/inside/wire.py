@@ -20,6 +20,7 @@ import sys
 import time
 
 FRAME = struct.Struct(">I")        #: the length prefix of every record
+MAX_FRAME = 2**32 - 1              #: the longest frame a length prefix can announce
 MAX_DEPTH = 8                      #: containers nested deeper are rejected
 MAX_INT_BITS = 4096                #: larger ints are rejected (JSON would need > 1233 digits)
 SCALAR_COST = 1                    #: budget bytes charged per scalar / container element
@@ -115,36 +116,76 @@ class BadValue(Exception):
     """A received value that is not in the wire format (or larger than its budget)."""
 
 
+#: The most elements along one axis of a received array (NumPy's own limit is ``2**63 - 1``;
+#: a zero-byte array of shape ``[0, 2**70]`` passes every size check and then fails to build).
+MAX_AXIS = 2**62
+
+
 def decode_value(obj, budget: Budget, depth: int = 0):
-    """Rebuild a value from its wire form, checking everything (raises ``BadValue``)."""
+    """Rebuild a value from its wire form, checking everything.
+
+    Total: whatever ``obj`` is (it comes from a process the student owns), this returns a
+    value or raises ``BadValue``, never anything else (an overflowing complex, a shape NumPy
+    cannot build, an unhashable dtype, a string with lone surrogates all included)."""
+    try:
+        return _decode(obj, budget, depth)
+    except BadValue:
+        raise
+    except TooLarge:
+        raise BadValue("the result is too large") from None
+    except (RecursionError, MemoryError):
+        raise BadValue("the result is too large") from None
+    except Exception:  # noqa: BLE001 - any other failure is the value's, never the grader's
+        raise BadValue("the result has an unexpected form") from None
+
+
+def plain_text(text: str) -> str:
+    """``text`` without lone surrogates (JSON may carry ``"\\ud800"``; UTF-8 cannot)."""
+    try:
+        text.encode("utf-8")
+        return text
+    except UnicodeEncodeError:
+        return text.encode("utf-8", "replace").decode("utf-8")
+
+
+def _decode(obj, budget: Budget, depth: int):
     if depth > MAX_DEPTH:
         raise BadValue("the result is nested too deeply")
     t = type(obj)
-    try:
-        if obj is None or t is bool or t is int or t is float:
-            budget.spend(SCALAR_COST)
-            return obj
-        if t is str:
-            budget.spend(len(obj))
-            return obj
-        if t is not dict:
-            raise BadValue("the result has an unexpected form")
-        tag, items = obj.get("t"), obj.get("v")
-        if tag == "array":
-            return _decode_array(obj, budget)
-        if type(items) is not list:
-            raise BadValue("the result has an unexpected form")
-        budget.spend(SCALAR_COST * len(items))
-        if tag == "tuple" or tag == "list":
-            out = [decode_value(x, budget, depth + 1) for x in items]
-            return tuple(out) if tag == "tuple" else out
-        if tag == "dict" and all(type(p) is list and len(p) == 2 and type(p[0]) is str
-                                 for p in items):
-            return {k: decode_value(x, budget, depth + 1) for k, x in items}
-        if tag == "complex" and len(items) == 2 and all(type(x) in (int, float) for x in items):
-            return complex(items[0], items[1])
-    except TooLarge:
-        raise BadValue("the result is too large") from None
+    if obj is None or t is bool or t is float:
+        budget.spend(SCALAR_COST)
+        return obj
+    if t is int:
+        if obj.bit_length() > MAX_INT_BITS:
+            raise BadValue(f"an int of more than {MAX_INT_BITS} bits")
+        budget.spend(SCALAR_COST)
+        return obj
+    if t is str:
+        budget.spend(len(obj))
+        return plain_text(obj)
+    if t is not dict:
+        raise BadValue("the result has an unexpected form")
+    tag, items = obj.get("t"), obj.get("v")
+    if type(tag) is not str:
+        raise BadValue("the result has an unexpected form")
+    if tag == "array":
+        return _decode_array(obj, budget)
+    if type(items) is not list:
+        raise BadValue("the result has an unexpected form")
+    budget.spend(SCALAR_COST * len(items))
+    if tag == "tuple" or tag == "list":
+        out = [_decode(x, budget, depth + 1) for x in items]
+        return tuple(out) if tag == "tuple" else out
+    if tag == "dict" and all(type(p) is list and len(p) == 2 and type(p[0]) is str
+                             for p in items):
+        return {plain_text(k): _decode(x, budget, depth + 1) for k, x in items}
+    if tag == "complex" and len(items) == 2 and all(type(x) is float for x in items):
+        return complex(items[0], items[1])
+    if tag == "complex" and len(items) == 2 and all(type(x) in (int, float) for x in items):
+        try:
+            return complex(float(items[0]), float(items[1]))
+        except OverflowError:
+            raise BadValue("a complex number out of range") from None
     raise BadValue("the result has an unexpected form")
 
 
@@ -152,9 +193,10 @@ def _decode_array(obj: dict, budget: Budget):
     import numpy as np
 
     dtype, shape, data = obj.get("dtype"), obj.get("shape"), obj.get("v")
-    if dtype not in ARRAY_DTYPES or type(data) is not str or type(shape) is not list:
+    if type(dtype) is not str or dtype not in ARRAY_DTYPES or type(data) is not str \
+            or type(shape) is not list:
         raise BadValue("an array that does not hold plain numbers")
-    if len(shape) > 32 or any(type(n) is not int or n < 0 for n in shape):
+    if len(shape) > 32 or any(type(n) is not int or not 0 <= n <= MAX_AXIS for n in shape):
         raise BadValue("an array with an invalid shape")
     count = 1
     for n in shape:
@@ -169,7 +211,10 @@ def _decode_array(obj: dict, budget: Budget):
         raise BadValue("an array whose data is not base64") from None
     if len(raw) != nbytes:
         raise BadValue("an array whose data does not match its shape")
-    return np.frombuffer(bytearray(raw), dtype=dtype).reshape(shape)
+    try:
+        return np.frombuffer(bytearray(raw), dtype=dtype).reshape(shape)
+    except (ValueError, OverflowError, TypeError):
+        raise BadValue("an array with an invalid shape") from None
 
 
 def record_cap(result_cap: int, output_bytes: int) -> int:
@@ -239,6 +284,50 @@ class FrameReader:
             if self.total_cap is not None and self.total > self.total_cap:
                 return "too-large", None
             self.buf += chunk
+
+
+class CaseStream:
+    """The cases file as the supervisor reads it: every case's frame, the names' cases one
+    after another in the job's order, so case ``g`` (counted over the whole job) is the file's
+    ``g``-th frame.
+
+    Nothing else says where a case is or how long it is: the job document (readable by student
+    code) holds no offsets or lengths, and this object keeps only the count of frames passed;
+    the file's offset is the kernel's (the workers have no descriptor of the file). Cases are
+    read in order, each at most once; a case skipped is passed over by its length prefix,
+    never read into memory."""
+
+    def __init__(self, fd: int):
+        self.fd, self.at = fd, 0
+        os.lseek(fd, 0, os.SEEK_SET)
+
+    def read(self, g: int) -> bytearray:
+        """Case ``g``'s whole frame (empty when the file holds no such case or it was read
+        already). The caller zeroes it when done, so no worker forked later finds it."""
+        while self.at < g:
+            n = self._length()
+            if n is None:
+                return bytearray()
+            os.lseek(self.fd, n, os.SEEK_CUR)
+            self.at += 1
+        n = self._length() if self.at == g else None
+        if n is None:
+            return bytearray()
+        self.at += 1
+        buf = bytearray(FRAME.size + n)
+        FRAME.pack_into(buf, 0, n)
+        done = FRAME.size
+        with memoryview(buf) as view:
+            while done < len(buf):
+                got = os.readv(self.fd, [view[done:]])
+                if got <= 0:
+                    break
+                done += got
+        return buf
+
+    def _length(self) -> int | None:
+        head = os.read(self.fd, FRAME.size)
+        return FRAME.unpack(head)[0] if len(head) == FRAME.size else None
 
 
 def write_all(fd: int, data: bytes) -> None:

@@ -20,8 +20,8 @@ import time
 from .confine import install_filter
 from .failures import (MISSING_AFTER_REFUSAL, REFUSED_CODE, Policy, exc_mro, exc_name,
                        reference_module, refused_code, safe_str)
-from .wire import (Budget, FrameReader, NotPlain, TooLarge, decode_value, encode_value, frame,
-                   record_cap, write_all)
+from .wire import (MAX_FRAME, Budget, FrameReader, NotPlain, TooLarge, decode_value,
+                   encode_value, frame, record_cap, write_all)
 
 
 class CaseTimeout(BaseException):
@@ -255,7 +255,7 @@ def worker_main(nj: dict, ns: dict, limits: dict, policy: Policy, fds: tuple[int
         loaded = worker.load_cells()
         worker.send({"t": "loaded", "name": nj["name"], "defined": nj["name"] in ns,
                      "printed": worker.capture.take()})
-        reader = FrameReader(in_fd, max([int(c["len"]) for c in nj["cases"]] or [0]))
+        reader = FrameReader(in_fd, MAX_FRAME)    # the supervisor's frames: no case's length
         while True:
             event, payload = reader.next(float("inf"))
             given = payload[0] if event == "record" else None
