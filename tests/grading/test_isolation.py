@@ -883,3 +883,40 @@ def test_the_job_document_holds_no_case_inputs():
         assert wire.FRAME.unpack_from(data)[0] == entry["len"] - wire.FRAME.size
         got.append(wire.decode_value(rec["args"], wire.Budget(1 << 20)))
     assert got[0] == (0.123456789,) and got[1][0].tolist() == [9.87654321]
+
+
+# ------------------------------------------------------------------------------------------
+# the job's cgroup on a pure cgroup v2 machine (this one may be v1): files in a folder laid out
+# as /sys/fs/cgroup is there
+
+
+def _fake_v2(root: Path, offered: str) -> None:
+    (root / "cgroup.controllers").write_text(offered + "\n")
+    (root / "cgroup.subtree_control").write_text("")
+    (root / cgroup.GROUP).mkdir()
+    (root / cgroup.GROUP / "cgroup.controllers").write_text(offered + "\n")
+    (root / cgroup.GROUP / "cgroup.subtree_control").write_text("")
+
+
+def test_a_v2_job_cgroup_gets_memory_pids_and_one_cpu(monkeypatch, tmp_path):
+    monkeypatch.setattr(cgroup, "V2_ROOT", str(tmp_path))
+    _fake_v2(tmp_path, "cpuset cpu io memory pids")
+    job = cgroup.JobCgroup("u1", 300, 17)
+    path = tmp_path / cgroup.GROUP / "u1"
+    assert job.dirs == [str(path)]
+    assert (path / "memory.max").read_text() == str(300 * 2**20)
+    assert (path / "pids.max").read_text() == "17"
+    quota, period = (path / "cpu.max").read_text().split()
+    assert quota == period                                   # one CPU at most
+    assert (path / "cpu.weight").read_text() == "100"       # the default weight, for every job
+    for parent in (tmp_path, tmp_path / cgroup.GROUP):      # switched on from the top down
+        assert set((parent / "cgroup.subtree_control").read_text().split()) == \
+            {"+cpu", "+memory", "+pids"}
+
+
+def test_a_v2_machine_without_the_cpu_controller_is_refused(monkeypatch, tmp_path):
+    monkeypatch.setattr(cgroup, "V2_ROOT", str(tmp_path))
+    _fake_v2(tmp_path, "memory pids")
+    with pytest.raises(cgroup.CgroupError, match="controllers cpu are not available"):
+        cgroup.JobCgroup("u1", 300, 17)
+    assert not (tmp_path / cgroup.GROUP / "u1").exists()
