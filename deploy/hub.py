@@ -461,7 +461,9 @@ def _up(args) -> int:
           f"As root (sudo from another account):\n"
           f"  add a student:     {sys.executable} {__file__} --state {s.state} add-student NAME\n"
           f"  add an instructor: {sys.executable} {__file__} --state {s.state} add-instructor NAME"
-          " (then restart the hub)\nStop: Ctrl-C\n", flush=True)
+          " (then restart the hub)\n"
+          f"  grade (as root):   {sys.executable} {__file__} --state {s.state} autograder grade "
+          "submitted --out grading --jobs 2\nStop: Ctrl-C\n", flush=True)
     os.chdir(s.paths["hub_dir"])
     os.execve(cmd[0], cmd, env)
     return 0
