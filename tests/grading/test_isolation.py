@@ -689,6 +689,20 @@ def test_no_job_runs_without_its_cgroup(monkeypatch, tmp_path):
     assert os.listdir(tmp_path) == []
 
 
+def test_the_supervisor_reads_a_process_cpu_clock():
+    """The clock the supervisor holds a case to (``/proc/<pid>/stat``), against this process's
+    own CPU clock; a process that is gone has used nothing more."""
+    from autograder.isolation.inside.confine import process_cpu_seconds
+
+    before = process_cpu_seconds(os.getpid())
+    t0 = time.process_time()
+    while time.process_time() - t0 < 0.3:
+        pass
+    used = process_cpu_seconds(os.getpid()) - before
+    assert used == pytest.approx(time.process_time() - t0, abs=0.05)
+    assert process_cpu_seconds(2**22 + 1) == 0.0       # above any pid_max: no such process
+
+
 def test_case_time_is_cpu_time_with_a_wall_backstop(mode):
     """A case's limit is its CPU time: 3 s asleep under a 2 s limit is not a timeout (a busy
     machine or a neighbour slows the wall clock, not the case's CPU clock); 2 s of CPU is, and
