@@ -26,8 +26,9 @@ What ``up`` builds, under the state folder (default ``/srv/4f9-hub``, owned by r
 - ``hub.json``: the settings ``deploy/jupyterhub_config.py`` reads.
 
 Besides the formgrader, the hub runs the grading service (``python -m autograder watch``,
-docs/grading-service.md) as a managed service of the grader account: every submission is graded
-as it arrives and its feedback page handed back through nbgrader's exchange. Its log is
+docs/grading-service.md) as a managed service, as root with the grader account's group
+(:func:`grading_command`): every submission is graded as it arrives and its feedback page
+handed back through nbgrader's exchange. Its log is
 ``<course>/service/watch.log``; ``grading_service``, ``grading_jobs`` and ``grading_workers`` in
 ``hub.json`` switch it off or size it (docs/deploying.md).
 
@@ -57,6 +58,10 @@ from pathlib import Path
 DEPLOY = Path(__file__).resolve().parent
 REPO = DEPLOY.parent
 SYSTEM_PYTHON = "/usr/bin/python3"
+SETPRIV = "/usr/bin/setpriv"
+#: the shell line that runs its arguments with ``umask 002`` (the grader account's group may
+#: change what the command writes)
+GROUP_WRITABLE = 'umask 002 && exec "$@"'
 #: JupyterHub of the hub and of both environments (the singleuser must match the hub's major)
 JUPYTERHUB_REQUIREMENT = "jupyterhub>=5,<6"
 
@@ -282,6 +287,12 @@ def prepare_exchange(s: HubSettings) -> Path:
     course.mkdir(exist_ok=True)
     shutil.chown(course, s.grader, s.instructors_group)
     os.chmod(course, 0o755)
+    # the grader's, as nbgrader's release_feedback makes it, before the grading service (root)
+    # puts a page there
+    feedback = course / "feedback"
+    feedback.mkdir(exist_ok=True)
+    shutil.chown(feedback, s.grader, s.grader)
+    os.chmod(feedback, 0o711)
     return root
 
 
@@ -300,6 +311,30 @@ def as_grader(s: HubSettings, args: list[str], timeout: float = 900) -> subproce
     return proc
 
 
+def grading_command(s: HubSettings, args: list[str]) -> list[str]:
+    """``python -m autograder ARGS`` from the instructors' environment as grading must run:
+    as root (the caller's uid), because only root gives every sandbox job a uid and a cgroup of
+    its own (memory, processes, one CPU), and ``grade`` and ``watch`` refuse to grade without
+    both (docs/grading.md); with the grader account's group and ``umask 002``, so what it
+    writes in the course folder (pages, its journal, grades) stays the grader account's to
+    read and replace; and the grader's ``HOME``, so it reads the course secret the grader's
+    commands read."""
+    return [SETPRIV, f"--regid={s.grader}", "--clear-groups", "--",
+            "/usr/bin/env", f"HOME={home_of(s.grader)}", "/bin/sh", "-c", GROUP_WRITABLE, "sh",
+            f"{s.paths['instructor_env']}/bin/python", "-m", "autograder", *args]
+
+
+def run_grading(s: HubSettings, args: list[str], timeout: float | None = None) -> int:
+    """:func:`grading_command` of ``args`` in the course folder (as root), with the grader
+    account's environment; its exit status (its output goes to ours)."""
+    if os.geteuid() != 0:
+        raise PermissionError("grading runs as root (every sandbox job gets a uid and a cgroup "
+                              "of its own): run this with sudo")
+    env = dict(grader_env(s), LANG="C.UTF-8")
+    return subprocess.run(grading_command(s, args), cwd=s.paths["course_dir"], env=env,
+                          timeout=timeout, check=False).returncode
+
+
 def prepare_course(s: HubSettings) -> None:
     """The grader's nbgrader course, released to the hub's exchange (inbound: graders' group)."""
     course = Path(s.paths["course_dir"])
@@ -314,6 +349,11 @@ def prepare_course(s: HubSettings) -> None:
     from autograder.course import ASSIGNMENT
 
     python = Path(s.paths["instructor_env"]) / "bin" / "python"
+    # the grading service (root) writes its journal and log here and reads the course secret:
+    # both made by the grader account first, so they stay its own
+    as_grader(s, ["mkdir", "-p", course / "service"])
+    as_grader(s, [python, "-c", "from autograder.grade.secret import read_secret; "
+                                "read_secret(None)"])
     as_grader(s, [python, "-m", "autograder", "release", "--course-root", course])
     as_grader(s, [python, "-m", "nbgrader", "release_assignment", ASSIGNMENT, "--force"])
     prepare_inbound(s)
@@ -421,7 +461,9 @@ def _up(args) -> int:
           f"As root (sudo from another account):\n"
           f"  add a student:     {sys.executable} {__file__} --state {s.state} add-student NAME\n"
           f"  add an instructor: {sys.executable} {__file__} --state {s.state} add-instructor NAME"
-          " (then restart the hub)\nStop: Ctrl-C\n", flush=True)
+          " (then restart the hub)\n"
+          f"  grade (as root):   {sys.executable} {__file__} --state {s.state} autograder grade "
+          "submitted --out grading --jobs 2\nStop: Ctrl-C\n", flush=True)
     os.chdir(s.paths["hub_dir"])
     os.execve(cmd[0], cmd, env)
     return 0
@@ -454,10 +496,15 @@ def main(argv: list[str] | None = None) -> int:
         p.add_argument("name")
         p.add_argument("password", nargs="?",
                        help="asked for when omitted (a password on the command line shows in ps)")
+    grading = sub.add_parser("autograder", help="python -m autograder ARGS as grading runs "
+                             "(as root, the grader account's group, in the course folder)")
+    grading.add_argument("args", nargs=argparse.REMAINDER)
     args = parser.parse_args(argv)
     try:
         if args.command == "up":
             return _up(args)
+        if args.command == "autograder":
+            return run_grading(_settings(args), args.args)
         return _add(args, "students_group" if args.command == "add-student"
                     else "instructors_group")
     except KeyboardInterrupt:

@@ -5,13 +5,19 @@ Every path, port and name comes from the settings file ``deploy/hub.py`` writes
 follows nbgrader's ``demos/demo_one_class_multiple_graders``: real Unix users, the default
 ``LocalProcessSpawner``, the formgrader as a hub service named after the course, run as the
 course's grader account and reachable by the group ``formgrade-<course>``; and the grading
-service (``python -m autograder watch``, feedback on every submission) as a second managed service
-of the grader account, which the hub starts, restarts when it exits, and stops with itself.
+service (``python -m autograder watch``, feedback on every submission) as a second managed service,
+which the hub starts, restarts when it exits, and stops with itself. The grading service runs as
+root, with the grader account's group (``hub.grading_command``): only root gives every sandbox
+job a uid and a cgroup of its own, and the grader refuses to grade without them.
 """
 
 import grp
 import json
 import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import hub  # noqa: E402  (deploy/hub.py: the command grading runs as)
 
 c = get_config()  # noqa: F821
 
@@ -78,19 +84,23 @@ c.JupyterHub.services = [{
 }]
 
 # --- the grading service: every submission graded as it arrives, feedback at once -------------
-# (docs/grading-service.md); a managed service with no URL: the hub starts it as the grader
-# account, starts it again whenever it exits, and stops it with itself. Its own log file, so its
-# lines (one per submission) are not lost among the hub's.
+# (docs/grading-service.md); a managed service with no URL: the hub (root) starts it as root,
+# starts it again whenever it exits, and stops it with itself. Root, because every sandbox job
+# needs a uid and a cgroup of its own (memory, processes, one CPU: docs/deploying.md), with the
+# grader account's group and umask 002 so what it writes stays the grader's. Its own log file,
+# so its lines (one per submission) are not lost among the hub's.
 if S.get("grading_service", True):
     WATCH_LOG = os.path.join(S["course_dir"], "service", "watch.log")
+    SETTINGS = hub.HubSettings(**{k: S[k] for k in hub.HubSettings.__dataclass_fields__
+                                  if k in S})
     c.JupyterHub.services.append({
         "name": f"{COURSE}-grading",
         "command": ["/bin/sh", "-c", 'mkdir -p "${0%/*}" && exec "$@" >>"$0" 2>&1', WATCH_LOG,
-                    os.path.join(S["instructor_env"], "bin", "python"), "-m", "autograder",
-                    "watch", "--exchange", S["exchange"], "--course", S["course_dir"],
-                    "--jobs", str(S.get("grading_jobs", 2)),
-                    "--workers", str(S.get("grading_workers", 2))],
-        "user": S["grader"],
+                    *hub.grading_command(SETTINGS, [
+                        "watch", "--exchange", S["exchange"], "--course", S["course_dir"],
+                        "--jobs", str(S.get("grading_jobs", 2)),
+                        "--workers", str(S.get("grading_workers", 2))])],
+        "user": "root",
         "cwd": S["course_dir"],
         "environment": dict(_env(S["instructor_env"], S["instructor_config"]),
                             MPLBACKEND="Agg", PYTHONUNBUFFERED="1"),

@@ -4,13 +4,17 @@ The sandbox is bubblewrap (``bwrap``): its own mount, PID, network, IPC and UTS 
 read-only filesystem holding only ``/usr``, the base interpreter, NumPy and the allow-listed
 ``course_lib`` tables, a private size-limited tmpfs ``/tmp``, its own ``/proc`` (read-only: a
 write to ``/proc/self/mem`` ignores page protections, so it could patch the interpreter's
-code) and a minimal ``/dev``. Every mount the job can write is ``noexec`` (bubblewrap cannot
-mount its tmpfs so, so a first shell inside remounts ``/tmp`` before dropping its capabilities;
-``/`` and ``/dev`` are root's, mode 0755).
-As root, the child then becomes a uid of its own with ``setpriv`` (no groups, no capabilities,
-``no_new_privs``); without root, bubblewrap needs unprivileged user namespaces. Inside, the
-worker that runs student code adds a seccomp filter (:mod:`.seccomp`; no new executable
-memory, no ``execve``, no new namespaces: user namespaces are off).
+code) and a minimal ``/dev``. The only mount the job can write is ``/tmp``, of the job's scratch
+size, and ``noexec`` (bubblewrap cannot mount its tmpfs so, so a first shell inside remounts
+``/tmp`` before dropping its capabilities); ``/`` and ``/dev`` are bubblewrap's tmpfs mounts,
+remounted read-only, so nothing is stored in memory beyond the scratch.
+
+Grading needs root (:func:`probe` refuses otherwise): the child then becomes a uid of its own
+with ``setpriv`` (:mod:`.identity`; no groups, no capabilities, ``no_new_privs``), and the job
+runs in a cgroup of its own (:mod:`.cgroup`: memory, processes, one CPU). Without root neither
+exists: an unprivileged user namespace maps every job to the same host uid, and no cgroup
+would cap the job's memory, processes or CPU. Inside, the worker that runs student code adds a
+seccomp filter (:mod:`.seccomp`; no new executable memory, no ``execve``, no new namespaces).
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ import subprocess
 import sys
 import sysconfig
 
-from . import seccomp
+from . import cgroup, seccomp
 from .allowlist import NUMBERS_VARIABLE
 
 BWRAP = "/usr/bin/bwrap"
@@ -38,6 +42,10 @@ LOOPBACK_DOWN = 'if [ -x /usr/bin/ip ]; then /usr/bin/ip link set lo down || exi
 #: Then the one mount the job can write, ``/tmp``, becomes ``noexec`` (bubblewrap makes its
 #: tmpfs without; ``/`` and ``/dev`` are bubblewrap's too, but root's and mode 0755).
 NOEXEC = '/usr/bin/mount -o remount,noexec,nosuid,nodev /tmp || exit 125; exec "$@"'
+#: Last of the mounts: bubblewrap's own tmpfs mounts ``/`` (the mount points) and ``/dev`` (its
+#: ``shm`` folder included) become read-only, so the job stores nothing in memory outside its
+#: scratch. Device nodes stay usable (``/dev/null`` is a bind mount of its own).
+READ_ONLY_TMPFS = ["--remount-ro", "/", "--remount-ro", "/dev"]
 INSTALL_HINT = "install it with `apt-get install bubblewrap` (or `make sandbox-deps`)"
 
 #: What an instructor loses with ``--unsafe-no-isolation`` (printed by the caller).
@@ -65,6 +73,13 @@ class Mode(enum.Enum):
     UNSAFE = "unsafe"
 
 
+#: Why grading refuses to run without root (the probe's message).
+NEEDS_ROOT = (
+    "grading must run as root: every job gets a uid of its own (setpriv) and a cgroup of its "
+    "own (memory, processes, one CPU), and only root can give it either. Run `grade` with sudo; "
+    "on the hub, deploy/ runs the grading service as root (docs/deploying.md).")
+
+
 def privileged() -> bool:
     """True when the grader runs as root (the sandbox then gets a uid of its own)."""
     return os.geteuid() == 0
@@ -72,15 +87,22 @@ def privileged() -> bool:
 
 @functools.lru_cache(maxsize=1)
 def probe() -> Mode:
-    """``Mode.ISOLATED`` when bubblewrap works here; else raise :class:`IsolationUnavailable`."""
+    """``Mode.ISOLATED`` when a sandbox with a uid and a cgroup of its own can be made for
+    every job here; else raise :class:`IsolationUnavailable` saying what is missing."""
     if not os.access(BWRAP, os.X_OK):
         raise IsolationUnavailable(f"bubblewrap ({BWRAP}) is not installed: {INSTALL_HINT}")
-    if privileged() and not os.access(SETPRIV, os.X_OK):
+    if not privileged():
+        raise IsolationUnavailable(NEEDS_ROOT)
+    if not os.access(SETPRIV, os.X_OK):
         raise IsolationUnavailable(f"{SETPRIV} is missing: install it with "
                                    "`apt-get install util-linux`")
     if not seccomp.available():
         raise IsolationUnavailable("the seccomp filter cannot be built: install libseccomp2 "
                                    "(`make sandbox-deps`) and the Python package pyseccomp")
+    try:
+        cgroup.check()
+    except cgroup.CgroupError as exc:
+        raise IsolationUnavailable(str(exc)) from None
     argv = [BWRAP, *namespace_args(), "--ro-bind", "/usr", "/usr", *system_links(),
             "--", "/usr/bin/true"]
     try:
@@ -90,22 +112,15 @@ def probe() -> Mode:
     if done.returncode != 0:
         why = done.stderr.decode("utf-8", "replace").strip()[:500]
         raise IsolationUnavailable(
-            f"bubblewrap cannot create a sandbox here ({why}). Run the grader as root, or "
-            "enable unprivileged user namespaces (sysctl user.max_user_namespaces > 0 and, on "
-            "Debian, kernel.unprivileged_userns_clone=1).")
+            f"bubblewrap cannot create a sandbox here ({why}).")
     return Mode.ISOLATED
 
 
 def namespace_args() -> list[str]:
-    """New namespaces for everything. Without root: ``--unshare-all`` (a user namespace with
-    an ordinary uid). As root, every namespace but the user one (``--unshare-all`` would map
-    only uid 0, and the child must become a real host uid of its own, see :mod:`.identity`)."""
-    common = ["--die-with-parent", "--new-session"]
-    if privileged():
-        return ["--unshare-ipc", "--unshare-pid", "--unshare-net", "--unshare-uts",
-                "--unshare-cgroup-try", *common]
-    return ["--unshare-all", "--unshare-user", "--uid", "1000", "--gid", "1000",
-            "--disable-userns", *common]
+    """New namespaces for everything but the user one (a user namespace would map only uid 0,
+    and the child must become a real host uid of its own, see :mod:`.identity`)."""
+    return ["--unshare-ipc", "--unshare-pid", "--unshare-net", "--unshare-uts",
+            "--unshare-cgroup-try", "--die-with-parent", "--new-session"]
 
 
 def system_links() -> list[str]:
@@ -153,10 +168,10 @@ def interpreter_mounts() -> list[str]:
 
 
 def bwrap_command(job_file: str, allowlist_dir: str, program_dir: str, fds: tuple[int, int],
-                  scratch_mb: int, uid: int | None) -> list[str]:
+                  scratch_mb: int, uid: int) -> list[str]:
     """The command that runs the child (the sandbox program of ``program_dir``, bound read-only)
-    in a fresh sandbox (as ``uid`` when root); ``fds``: the channel's write end and the cases
-    file, inherited (the cases are in no file the sandbox can open)."""
+    in a fresh sandbox, as ``uid``; ``fds``: the channel's write end and the cases file,
+    inherited (the cases are in no file the sandbox can open)."""
     argv = [BWRAP, *namespace_args(), "--ro-bind", "/usr", "/usr", *system_links(),
             *interpreter_mounts(), "--perms", "0755", "--dir", os.path.dirname(PROGRAM),
             "--perms", "0755", "--dir", SITE]
@@ -165,16 +180,15 @@ def bwrap_command(job_file: str, allowlist_dir: str, program_dir: str, fds: tupl
     argv += ["--ro-bind", os.path.join(allowlist_dir, "course_lib"), f"{SITE}/course_lib",
              "--ro-bind", job_file, JOB, "--ro-bind", program_dir, PROGRAM,
              "--proc", "/proc", "--remount-ro", "/proc", "--dev", "/dev",
-             "--size", str(int(scratch_mb) * 2**20), "--perms", "1777", "--tmpfs", "/tmp", "--chdir", "/tmp"]
-    if uid is not None:   # as root: loopback down, noexec, then a uid of its own, no capability
-        argv += ["--cap-drop", "ALL", "--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID",
-                 "--cap-add", "CAP_SETPCAP", "--cap-add", "CAP_NET_ADMIN",
-                 "--cap-add", "CAP_SYS_ADMIN", "--as-pid-1", "--",
-                 "/bin/sh", "-c", LOOPBACK_DOWN + NOEXEC, "sh",
-                 SETPRIV, f"--reuid={uid}", f"--regid={uid}", "--clear-groups",
-                 "--inh-caps=-all", "--bounding-set=-all", "--no-new-privs"]
-    else:
-        argv += ["--as-pid-1", "--"]
+             "--size", str(int(scratch_mb) * 2**20), "--perms", "1777", "--tmpfs", "/tmp",
+             "--chdir", "/tmp", *READ_ONLY_TMPFS]
+    # loopback down, noexec, then a uid of its own, no capability
+    argv += ["--cap-drop", "ALL", "--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID",
+             "--cap-add", "CAP_SETPCAP", "--cap-add", "CAP_NET_ADMIN",
+             "--cap-add", "CAP_SYS_ADMIN", "--as-pid-1", "--",
+             "/bin/sh", "-c", LOOPBACK_DOWN + NOEXEC, "sh",
+             SETPRIV, f"--reuid={uid}", f"--regid={uid}", "--clear-groups",
+             "--inh-caps=-all", "--bounding-set=-all", "--no-new-privs"]
     return argv + [interpreter(), "-I", "-S", "-B", CHILD, "--job", JOB, "--site", SITE,
                    "--channel-fd", str(fds[0]), "--cases-fd", str(fds[1])]
 

@@ -31,9 +31,12 @@ def wire_kind(kind: CellKind) -> str:
 
 @dataclass(frozen=True)
 class Limits:
-    """Resource limits of one job (the defaults suit the course's exercises)."""
+    """Resource limits of one job (the defaults suit the course's exercises). Every job also
+    gets at most one CPU, at the same weight as every other (:mod:`~.cgroup`)."""
 
-    case_timeout: float = 10.0    #: wall seconds per case
+    #: CPU seconds per case, on the worker's CPU clock (stopped in any case after
+    #: :data:`~.inside.confine.WALL_FACTOR` times this in wall-clock time)
+    case_timeout: float = 10.0
     load_timeout: float = 40.0    #: wall seconds for the setup cell, and for ALL of a name's cells
     job_timeout: float = 600.0    #: wall seconds for the whole notebook (every name, every restart)
     memory_mb: int = 2048         #: the WHOLE job (all its processes, incl. its tmpfs scratch)

@@ -1,12 +1,13 @@
 """The grader's side: run one student's notebook in one sandbox, read what comes back.
 
 :func:`run_notebook` writes the job (plain data only) into a private directory, takes a uid no
-other job uses (as root), makes the job's cgroup, starts the sandbox program (:mod:`.inside`,
-"the child") inside bubblewrap, and reads its ONE channel with a hard byte cap and a
-wall-clock budget. Every record is re-validated here (:class:`Collector`); nothing the child
+other job uses, makes the job's cgroup (memory, processes, one CPU), starts the sandbox
+program (:mod:`.inside`, "the child") inside bubblewrap, and reads its ONE channel with a hard
+byte cap and a wall-clock budget. Every record is re-validated here (:class:`Collector`); nothing the child
 announces is trusted. When
 the job ends, for whatever reason, the sandbox is killed, and as root no process of its uid is
-left when this returns.
+left when this returns. In the sandbox mode there is no job without its uid and its cgroup:
+when either cannot be had, the job is not run (:class:`~.bwrap.IsolationError`).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from autograder.model import CaseOutcome, NameRun, OutcomeKind
 from . import allowlist, bwrap, seccomp
 from .inside import wire
 from .inside.supervisor import GRACE, SUPERVISOR, name_budget
-from .cgroup import JobCgroup
+from .cgroup import CgroupError, JobCgroup
 from .identity import allocate_uid
 from .jobs import Limits, NotebookJob, validate_job
 
@@ -298,7 +299,7 @@ def _stop(proc: subprocess.Popen, ending: str) -> None:
 
 def _spawn(argv: list[str], cwd: str, env: dict, fds: tuple[int, int], errfile,
            cgroup) -> subprocess.Popen:
-    if cgroup is not None and cgroup.procs_files():
+    if cgroup is not None:
         argv = [bwrap.posix_shell(), "-c", JOIN_CGROUP, "sh", *cgroup.procs_files(), "--", *argv]
     return subprocess.Popen(argv, cwd=cwd, env=env, stdin=subprocess.DEVNULL,
                             stdout=subprocess.DEVNULL, stderr=errfile, pass_fds=fds,
@@ -309,6 +310,14 @@ def _sandbox_failure(proc: subprocess.Popen, errfile) -> str:
     errfile.seek(0)
     text = errfile.read(4000).decode("utf-8", "replace").strip()
     return f"the sandbox did not start (exit code {proc.returncode}): {text or 'no message'}"
+
+
+def _job_cgroup(uid: int, limits: Limits) -> JobCgroup:
+    """The job's cgroup, named after its uid; never a job without one."""
+    try:
+        return JobCgroup(f"u{uid}", limits.memory_mb, limits.pids)
+    except CgroupError as exc:
+        raise bwrap.IsolationError(str(exc)) from None
 
 
 DEFAULT_LIMITS = Limits()
@@ -326,7 +335,9 @@ def run_notebook(job: NotebookJob, limits: Limits = DEFAULT_LIMITS,
     """
     validate_job(job)
     mode = bwrap.probe() if mode is None else mode
-    root = mode is bwrap.Mode.ISOLATED and bwrap.privileged()
+    root = mode is bwrap.Mode.ISOLATED
+    if root and not bwrap.privileged():
+        raise bwrap.IsolationUnavailable(bwrap.NEEDS_ROOT)
     collector = Collector(job, limits)
     workdir = tempfile.mkdtemp(prefix="autograder-isolation-")
     lease = cgroup = None
@@ -334,7 +345,7 @@ def run_notebook(job: NotebookJob, limits: Limits = DEFAULT_LIMITS,
         cases_file = tempfile.TemporaryFile(dir=workdir)
         job_file = _write_job_files(job, limits, workdir, root, mode, cases_file)
         lease = allocate_uid() if root else None
-        cgroup = JobCgroup(f"u{lease.uid}", limits.memory_mb, limits.pids) if root else None
+        cgroup = _job_cgroup(lease.uid, limits) if root else None
         rfd, wfd = os.pipe()
         fds = (wfd, cases_file.fileno())
         argv, cwd = _command(mode, workdir, job_file, fds, limits, lease.uid if lease else None)

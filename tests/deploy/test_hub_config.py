@@ -14,6 +14,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import hubtools  # noqa: F401  (puts deploy/ on sys.path)
 
 import hub  # deploy/hub.py
@@ -71,14 +73,24 @@ def _hub_config(tmp_path, monkeypatch, **settings) -> dict:
     return s, {svc["name"]: svc for svc in config.JupyterHub.services}
 
 
-def test_the_hub_runs_the_grading_service_as_the_grader(tmp_path, monkeypatch):
+def _service_args(cmd: list[str], s) -> list[str]:
+    """The arguments of ``python -m autograder`` in the service's command line."""
+    python = cmd.index(f"{s.paths['instructor_env']}/bin/python")
+    assert cmd[python + 1:python + 3] == ["-m", "autograder"]
+    return cmd[python + 3:]
+
+
+def test_the_hub_runs_the_grading_service_as_root_with_the_graders_group(tmp_path, monkeypatch):
+    """Root, because every sandbox job needs a uid and a cgroup of its own (the grader refuses
+    to grade without them); the grader account's group, so what it writes stays the grader's."""
     s, services = _hub_config(tmp_path, monkeypatch, grading_jobs=3, grading_workers=2)
     watch = services[f"{s.course_id}-grading"]
-    assert watch["user"] == s.grader and "url" not in watch      # managed, no web page
+    assert watch["user"] == "root" and "url" not in watch      # managed, no web page
     cmd = watch["command"]
-    python = cmd.index(f"{s.paths['instructor_env']}/bin/python")
-    args = cmd[python + 1:]
-    assert args[:3] == ["-m", "autograder", "watch"]
+    assert cmd[cmd.index(hub.SETPRIV) + 1] == f"--regid={s.grader}"
+    assert f"HOME={hub.home_of(s.grader)}" in cmd              # the grader's course secret
+    args = _service_args(cmd, s)
+    assert args[0] == "watch"
     for flag, value in (("--exchange", s.paths["exchange"]), ("--course", s.paths["course_dir"]),
                         ("--jobs", "3"), ("--workers", "2")):
         assert args[args.index(flag) + 1] == value
@@ -90,12 +102,22 @@ def test_the_hub_runs_the_grading_service_as_the_grader(tmp_path, monkeypatch):
     assert f"{s.course_id}-grading" not in services
 
 
+def _runnable_here(cmd: list[str], s) -> list[str]:
+    """The service's command line with this Python in place of the instructors', and the
+    group of root in place of the (absent) grader account's."""
+    cmd = list(cmd)
+    cmd[cmd.index(f"{s.paths['instructor_env']}/bin/python")] = sys.executable
+    cmd[cmd.index(f"--regid={s.grader}")] = "--regid=0"
+    return cmd
+
+
 def test_the_grading_services_log_gets_its_output(tmp_path, monkeypatch):
     """The service's command line, run with this Python in place of the instructors': the
     shell makes the log's folder and the service's errors land in the log."""
+    if os.geteuid() != 0:
+        pytest.skip("the service's command runs as root (setpriv)")
     s, services = _hub_config(tmp_path, monkeypatch)
-    cmd = list(services[f"{s.course_id}-grading"]["command"])
-    cmd[cmd.index(f"{s.paths['instructor_env']}/bin/python")] = sys.executable
+    cmd = _runnable_here(services[f"{s.course_id}-grading"]["command"], s)
     # the course folder and its log here, not in the (absent) grader's home
     course = tmp_path / "course"
     assert cmd[3] == str(Path(s.paths["course_dir"]) / "service" / "watch.log")
@@ -107,9 +129,105 @@ def test_the_grading_services_log_gets_its_output(tmp_path, monkeypatch):
     assert "is not a folder (the exchange's inbound)" in said, said
 
 
-def test_bad_grading_service_sizes_are_refused():
-    import pytest
+#: a hostile graded function: 480 MB into /, /dev/shm and /dev, processes past the cap, its ids
+HOSTILE_CELL = """
+import errno, os, time
+def caps(k):
+    if k < 3:
+        written = 0
+        try:
+            with open(["/big", "/dev/shm/big", "/dev/big"][k], "wb") as f:
+                for _ in range(480):
+                    f.write(bytes(2**20))
+                    written += 1
+        except OSError as exc:
+            return written, errno.errorcode.get(exc.errno, "?")
+        return written, "written"
+    if k == 3:
+        n = 0
+        for _ in range(200):
+            try:
+                pid = os.fork()
+            except OSError:
+                break
+            if pid == 0:
+                time.sleep(60)
+                os._exit(0)
+            n += 1
+        return n
+    return os.getuid(), os.getgid()
+"""
 
+#: run in the grading service's place (its command line, ``-c`` for ``-m autograder watch``):
+#: one job of the hostile cell, through the probe and ``run_notebook`` as the service runs
+#: them, the job's cgroup files read back from the kernel as it is made
+HOSTILE_JOB = """
+import json, os, sys
+from autograder.isolation import CaseInput, Limits, NameJob, NotebookJob, cgroup, probe, runner
+from autograder.isolation import run_notebook
+
+WANTED = {"memory.limit_in_bytes", "memory.max", "pids.max", "cpu.cfs_quota_us",
+          "cpu.cfs_period_us", "cpu.max", "cpu.shares", "cpu.weight"}
+seen = {}
+
+
+class Spy(cgroup.JobCgroup):
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        for d in self.dirs:
+            for name in set(os.listdir(d)) & WANTED:
+                with open(os.path.join(d, name)) as f:
+                    seen[name] = f.read().strip()
+
+
+runner.JobCgroup = Spy
+limits = Limits(case_timeout=20.0)
+job = NotebookJob("hub", "", [NameJob("caps", "function", [("c", sys.argv[1])],
+                                      [CaseInput((k,), {}) for k in range(5)])])
+run = run_notebook(job, limits, probe())["caps"]
+print(json.dumps({"cgroup": seen, "memory": limits.memory_mb * 2**20, "pids": limits.pids,
+                  "values": [o.value for o in run.outcomes],
+                  "kinds": [o.kind.value for o in run.outcomes]}))
+"""
+
+
+def test_a_job_of_the_hubs_grading_service_is_capped(tmp_path, monkeypatch):
+    """A hostile job run as the hub's grading service runs (its command line): its own uid,
+    its own cgroup with the memory, process and CPU limits, ``/`` and ``/dev`` take no byte,
+    and forks past the process cap fail."""
+    from autograder.isolation import identity
+
+    s, services = _hub_config(tmp_path, monkeypatch)
+    watch = services[f"{s.course_id}-grading"]
+    assert watch["user"] == "root"
+    if os.geteuid() != 0:
+        pytest.skip("the hub runs its grading service as root")
+    cmd = _runnable_here(watch["command"], s)
+    python = cmd.index(sys.executable)
+    cmd = cmd[4:python + 1] + ["-c", HOSTILE_JOB, HOSTILE_CELL]   # no log file; the job
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600, cwd=hub.REPO,
+                          env=dict(os.environ, PYTHONPATH=str(hub.REPO)))
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    got = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert got["kinds"] == ["returned"] * 5, got
+    for written, why in got["values"][:3]:
+        assert written == 0 and why in ("EROFS", "EACCES"), got["values"]
+    assert 0 < got["values"][3] < got["pids"]
+    uid, gid = got["values"][4]
+    assert uid == gid and identity.UID_BASE <= uid < identity.UID_BASE + identity.UID_COUNT
+    cg = got["cgroup"]
+    assert cg.get("memory.limit_in_bytes", cg.get("memory.max")) == str(got["memory"]), cg
+    assert cg["pids.max"] == str(got["pids"])
+    if "cpu.max" in cg:
+        quota, period = cg["cpu.max"].split()
+        assert cg["cpu.weight"] == "100"
+    else:
+        quota, period = cg["cpu.cfs_quota_us"], cg["cpu.cfs_period_us"]
+        assert cg["cpu.shares"] == "1024"
+    assert quota != "max" and 0 < int(quota) <= int(period)     # one CPU at most
+
+
+def test_bad_grading_service_sizes_are_refused():
     for bad in ({"grading_jobs": 0}, {"grading_workers": "2"}):
         with pytest.raises(ValueError, match="at least 1"):
             hub.HubSettings(state="/nonexistent", grader="t4f9nobody", **bad)

@@ -148,20 +148,20 @@ def _login(url: str, user: str, password: str) -> tuple[bool, float]:
     return ok, time.perf_counter() - t0
 
 
-def _service_processes(settings) -> list[tuple[int, int]]:
-    """``(pid, uid)`` of each ``autograder watch`` process serving this hub's course."""
+def _service_processes(settings) -> list[tuple[int, int, int]]:
+    """``(pid, uid, gid)`` of each ``autograder watch`` process serving this hub's course."""
     found = []
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
             continue
         try:
             args = (entry / "cmdline").read_bytes().split(b"\0")
-            uid = entry.stat().st_uid
+            st = entry.stat()
         except OSError:
             continue
         if b"watch" in args and settings.paths["course_dir"].encode() in args \
                 and any(a.endswith(b"python") for a in args[:1]):
-            found.append((int(entry.name), uid))
+            found.append((int(entry.name), st.st_uid, st.st_gid))
     return found
 
 
@@ -173,14 +173,16 @@ def measured():
     RESULTS.write_text(json.dumps(got, indent=1) + "\n")
 
 
-def test_the_service_runs_as_the_grader_and_answers_alone(grading_hub, measured):
+def test_the_service_runs_as_root_with_the_graders_group_and_answers_alone(grading_hub,
+                                                                           measured):
     from autograder.service.policy import attempts_line
 
     settings = grading_hub["settings"]
     procs = _service_processes(settings)
     assert procs, "no `autograder watch` process serves the hub's course"
-    grader_uid = hub.pwd.getpwnam(settings.grader).pw_uid
-    assert {uid for _, uid in procs} == {grader_uid}, procs
+    # root: every sandbox job gets a uid and a cgroup of its own (deploy/jupyterhub_config.py)
+    grader_gid = hub.grp.getgrnam(settings.grader).gr_gid
+    assert {(uid, gid) for _, uid, gid in procs} == {(0, grader_gid)}, procs
     _wait_ready(settings)       # measured alone: not behind the service's start-up
     lone = []
     for user in LONE:

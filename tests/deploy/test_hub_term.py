@@ -209,11 +209,12 @@ def _check_privacy_through_the_hub(page, url: str) -> None:
 
 
 def _grade(settings) -> None:
-    """The grader account collects and grades, as the README's instructor section says."""
+    """The grader account collects, root grades (each sandbox job a uid and a cgroup of its
+    own), as the README's instructor section says."""
     python = Path(settings.paths["instructor_env"]) / "bin" / "python"
     hub.as_grader(settings, [python, "-m", "nbgrader", "collect", A])
-    hub.as_grader(settings, [python, "-m", "autograder", "grade", "submitted", "--out", "grading",
-                             "--jobs", "2"], timeout=600)
+    assert hub.run_grading(settings, ["grade", "submitted", "--out", "grading", "--jobs", "2"],
+                           timeout=600) == 0
 
 
 def _mark_in_the_formgrader(browser, course_hub) -> str:

@@ -486,6 +486,62 @@ def test_the_victim_in_the_same_batch_is_unaffected(hold):
 
 
 # --------------------------------------------------------------------------------------------
+# neighbours in the same batch: spinning (60 processes, each in a session of its own), sleeping,
+# memory-hungry; honest students graded beside them
+
+NEIGHBOURS = {"n1_spin": "spin.txt", "n3_sleep": "sleep.txt", "n5_hog": "hog.txt"}
+HONEST = ("n2_honest", "n4_honest", "n6_honest")
+PHONG_NAMES = ("normalize", "reflect", "phong", "halfway", "blinn_phong")
+NEIGHBOURS_CASE_TIMEOUT = 0.5
+
+
+@pytest.fixture(scope="module")
+def neighbours(tmp_path_factory):
+    src = SOURCES.get("q5_phong")
+    if src is None:
+        pytest.skip("q5_phong is not in the course")
+    root = tmp_path_factory.mktemp("neighbours")
+    sub = root / "submitted"
+    nbs = {student: _phong_with({n: payload(name_of, name=n) for n in PHONG_NAMES}, student)
+           for student, name_of in NEIGHBOURS.items()}
+    for student, nb in nbs.items():
+        write_nb(sub / student / "tripos2006" / "q5_phong.ipynb", nb)
+    # the first honest student hands in every notebook (the costlier cases too), graded in the
+    # other slot while the spinner holds its own for up to a minute; the others meet the
+    # sleeper and the hog
+    honest = {HONEST[0]: _ALL} | {student: [src] for student in HONEST[1:]}
+    for student, srcs in honest.items():
+        for honest_src in srcs:
+            write_nb(sub / student / "tripos2006" / f"{honest_src.name}.ipynb",
+                     model_version(honest_src))
+    (root / "secret").write_bytes(SECRET + b"\n")
+    # a tight limit (every honest case needs far less CPU): a case's time is its own CPU time,
+    # so the neighbours cannot make it longer; were it wall-clock time, they would
+    run_grade(sub, root / "out", "--no-gradebook", "--job-timeout", "60", "--memory-mb", "768",
+              timeout=NEIGHBOURS_CASE_TIMEOUT, secret_file=root / "secret")
+    return {"rows": read_grades(root / "out"), "honest": honest}
+
+
+def test_neighbours_cost_an_honest_student_nothing(neighbours):
+    """The spinner's 60 sessions share ONE job's CPU (its cgroup), and a case's time is its own
+    CPU time: the honest students beside it get full marks, no case timed out."""
+    for student, srcs in neighbours["honest"].items():
+        for honest_src in srcs:
+            for gid, (score, status) in expect_full_marks(honest_src).items():
+                row = neighbours["rows"][(student, honest_src.name, gid)]
+                assert row["status"] == status, (student, gid, row["message"])
+                if score is not None:
+                    assert float(row["score"]) == pytest.approx(score, abs=1e-6), (student, gid)
+
+
+def test_the_neighbours_themselves_score_nothing(neighbours):
+    for student in NEIGHBOURS:
+        for name in PHONG_NAMES:
+            row = neighbours["rows"][(student, "q5_phong", f"test_{name}")]
+            assert float(row["score"]) == 0.0, (student, name, row["message"])
+
+
+# --------------------------------------------------------------------------------------------
 # two grading runs at once on one machine
 
 

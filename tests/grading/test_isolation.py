@@ -18,9 +18,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from autograder.isolation import (CaseInput, IsolationUnavailable, Limits, Mode, NameJob,
-                                  NotebookJob, run_notebook)
-from autograder.isolation import bwrap, identity
+from autograder.isolation import (CaseInput, IsolationError, IsolationUnavailable, Limits, Mode,
+                                  NameJob, NotebookJob, run_notebook)
+from autograder.isolation import bwrap, cgroup, identity
 from autograder.isolation.inside import wire
 from autograder.model import OutcomeKind as K
 
@@ -692,35 +692,73 @@ def test_probe_says_what_to_install(monkeypatch):
         bwrap.probe.cache_clear()
 
 
-NON_ROOT = """
-import sys
-sys.path[:0] = [{repo!r}, {site!r}]
-from autograder.isolation import CaseInput, Limits, NameJob, NotebookJob, probe, run_notebook
-src = "import os\\ndef u(x):\\n    return os.getuid(), os.getppid(), x * 2\\n"
-job = NotebookJob("n", "import numpy as np\\n", [NameJob("u", "function", [("a", src)],
-                                                           [CaseInput((3,), {{}})])])
-print(repr(run_notebook(job, Limits(), probe())["u"].outcomes[0].value))
-"""
+def test_no_job_runs_without_root(monkeypatch):
+    """Without root a job could get neither a uid nor a cgroup of its own (an unprivileged user
+    namespace maps every job to the grader's uid; no cgroup caps memory, processes or CPU):
+    the probe refuses, saying what to do, and no sandboxed job runs."""
+    monkeypatch.setattr(bwrap, "privileged", lambda: False)
+    bwrap.probe.cache_clear()
+    try:
+        with pytest.raises(IsolationUnavailable, match="must run as root"):
+            bwrap.probe()
+        with pytest.raises(IsolationUnavailable, match="must run as root"):
+            run(Mode.ISOLATED, fn("u", "def u():\n    return 1\n"))
+    finally:
+        bwrap.probe.cache_clear()
 
 
-def test_without_root_user_namespaces_isolate(mode):
-    """As an ordinary user (``nobody``), with the system's Python of the same version."""
-    system_python = Path("/usr/bin/python3")
-    site = Path(np.__file__).resolve().parents[1]
-    if not bwrap.privileged() or not system_python.exists():
-        pytest.skip("needs root (to become nobody) and /usr/bin/python3")
-    version = subprocess.run([system_python, "-c", "import sys; print(sys.version_info[:2])"],
-                             capture_output=True, text=True).stdout.strip()
-    if version != str(tuple(sys.version_info[:2])):
-        pytest.skip(f"/usr/bin/python3 is {version}, NumPy here is for {sys.version_info[:2]}")
-    done = subprocess.run(
-        ["/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups",
-         system_python, "-c", NON_ROOT.format(repo=str(REPO), site=str(site))],
-        capture_output=True, text=True, timeout=120, env={"HOME": "/tmp", "PATH": "/usr/bin"})
-    if "Permission denied" in done.stderr:
-        pytest.skip("the repository or NumPy is not readable by nobody")
-    assert done.returncode == 0, done.stderr[-2000:]
-    assert done.stdout.strip().splitlines()[-1] == "(1000, 1, 6)"   # its parent is PID 1: its own namespace
+def test_no_job_runs_without_its_cgroup(monkeypatch, tmp_path):
+    """No cgroup hierarchy (here: an empty folder in its place): the probe refuses, and a job
+    is not run without its cgroup (the grader's problem, never an unconfined run)."""
+    if not bwrap.privileged():
+        pytest.skip("needs root (without root the probe refuses first)")
+    monkeypatch.setattr(cgroup, "V1_ROOT", str(tmp_path))
+    monkeypatch.setattr(cgroup, "V2_ROOT", str(tmp_path))
+    bwrap.probe.cache_clear()
+    try:
+        with pytest.raises(IsolationUnavailable, match="cgroup"):
+            bwrap.probe()
+        with pytest.raises(IsolationError, match="cgroup"):
+            run(Mode.ISOLATED, fn("u", "def u():\n    return 1\n"))
+    finally:
+        bwrap.probe.cache_clear()
+    assert os.listdir(tmp_path) == []
+
+
+def test_the_supervisor_reads_a_process_cpu_clock():
+    """The clock the supervisor holds a case to (``/proc/<pid>/stat``), against this process's
+    own CPU clock; a process that is gone has used nothing more."""
+    from autograder.isolation.inside.confine import process_cpu_seconds
+
+    before = process_cpu_seconds(os.getpid())
+    t0 = time.process_time()
+    while time.process_time() - t0 < 0.3:
+        pass
+    used = process_cpu_seconds(os.getpid()) - before
+    assert used == pytest.approx(time.process_time() - t0, abs=0.05)
+    assert process_cpu_seconds(2**22 + 1) == 0.0       # above any pid_max: no such process
+
+
+def test_case_time_is_cpu_time_with_a_wall_backstop(mode):
+    """A case's limit is its CPU time: 3 s asleep under a 2 s limit is not a timeout (a busy
+    machine or a neighbour slows the wall clock, not the case's CPU clock); 2 s of CPU is, and
+    so is sleeping past the backstop (``confine.WALL_FACTOR`` times the limit)."""
+    limit = 2.0
+    clock = fn("clock", f"""
+        import time
+        def clock(k):
+            if k == 0:
+                time.sleep({1.5 * limit})
+            elif k == 1:
+                while True:
+                    pass
+            else:
+                time.sleep(1000)
+            return k
+        """, cases=[(0,), (1,), (2,)])
+    runs = run(mode, clock, limits=Limits(case_timeout=limit, load_timeout=10.0))["clock"]
+    assert kinds(runs) == [K.RETURNED, K.TIMEOUT, K.TIMEOUT]
+    assert runs.outcomes[0].value == 0
 
 
 def test_unsafe_mode_runs_the_same_child(tmp_path):
@@ -918,3 +956,40 @@ def test_the_job_file_the_sandbox_sees_does_not_tell_cases_apart(mode):
         seen.append(json.loads(docs[0]))
     assert [len(n["cases"]) for n in seen[0]["names"]] == [3, 3]
     assert seen[0] == seen[1]
+
+
+# ------------------------------------------------------------------------------------------
+# the job's cgroup on a pure cgroup v2 machine (this one may be v1): files in a folder laid out
+# as /sys/fs/cgroup is there
+
+
+def _fake_v2(root: Path, offered: str) -> None:
+    (root / "cgroup.controllers").write_text(offered + "\n")
+    (root / "cgroup.subtree_control").write_text("")
+    (root / cgroup.GROUP).mkdir()
+    (root / cgroup.GROUP / "cgroup.controllers").write_text(offered + "\n")
+    (root / cgroup.GROUP / "cgroup.subtree_control").write_text("")
+
+
+def test_a_v2_job_cgroup_gets_memory_pids_and_one_cpu(monkeypatch, tmp_path):
+    monkeypatch.setattr(cgroup, "V2_ROOT", str(tmp_path))
+    _fake_v2(tmp_path, "cpuset cpu io memory pids")
+    job = cgroup.JobCgroup("u1", 300, 17)
+    path = tmp_path / cgroup.GROUP / "u1"
+    assert job.dirs == [str(path)]
+    assert (path / "memory.max").read_text() == str(300 * 2**20)
+    assert (path / "pids.max").read_text() == "17"
+    quota, period = (path / "cpu.max").read_text().split()
+    assert quota == period                                   # one CPU at most
+    assert (path / "cpu.weight").read_text() == "100"       # the default weight, for every job
+    for parent in (tmp_path, tmp_path / cgroup.GROUP):      # switched on from the top down
+        assert set((parent / "cgroup.subtree_control").read_text().split()) == \
+            {"+cpu", "+memory", "+pids"}
+
+
+def test_a_v2_machine_without_the_cpu_controller_is_refused(monkeypatch, tmp_path):
+    monkeypatch.setattr(cgroup, "V2_ROOT", str(tmp_path))
+    _fake_v2(tmp_path, "memory pids")
+    with pytest.raises(cgroup.CgroupError, match="controllers cpu are not available"):
+        cgroup.JobCgroup("u1", 300, 17)
+    assert not (tmp_path / cgroup.GROUP / "u1").exists()

@@ -1,6 +1,11 @@
 """How the sandbox's processes confine themselves: resource limits, ``prctl`` (the parent-death
-signal, non-dumpable), the modules loaded while compiled code still may be, and the seccomp
-filter a worker installs before any student text runs.
+signal, non-dumpable), the modules loaded while compiled code still may be, the seccomp
+filter a worker installs before any student text runs, and the clocks a case is timed on.
+
+A case's time limit is CPU time, on the worker's own CPU clock: a busy machine or a neighbour
+slows an honest case's wall clock, not its CPU clock, so neither turns it into a timeout. A case
+that passes its time off the CPU (asleep, waiting on a child) is stopped by a wall-clock
+backstop, :data:`WALL_FACTOR` times the limit.
 
 Standard library only: this module runs inside the sandbox.
 """
@@ -8,7 +13,10 @@ Standard library only: this module runs inside the sandbox.
 from __future__ import annotations
 
 import os
+import signal
 
+#: The wall-clock backstop of a case, in multiples of its CPU time limit.
+WALL_FACTOR = 3.0
 _KEPT: list = []      #: libraries loaded for good before the filter
 PR_SET_PDEATHSIG = 1
 PR_SET_DUMPABLE = 4
@@ -94,3 +102,28 @@ def set_rlimits(limits: dict, budget_seconds: float) -> None:
         except (ValueError, OSError):
             pass
 
+
+
+def arm_case_timers(seconds: float) -> None:
+    """Signal this process after ``seconds`` of its CPU time (``SIGPROF``) or ``WALL_FACTOR``
+    times that in wall-clock time (``SIGALRM``), whichever comes first."""
+    signal.setitimer(signal.ITIMER_PROF, seconds)
+    signal.setitimer(signal.ITIMER_REAL, WALL_FACTOR * seconds)
+
+
+def disarm_case_timers() -> None:
+    signal.setitimer(signal.ITIMER_PROF, 0)
+    signal.setitimer(signal.ITIMER_REAL, 0)
+
+
+def process_cpu_seconds(pid: int) -> float:
+    """CPU seconds used by process ``pid``: all its threads, and its children it has waited
+    for (``/proc/<pid>/stat``: utime, stime, cutime, cstime); 0.0 once it is gone."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            text = f.read()
+        fields = text[text.rindex(b")") + 2:].split()   # from field 3 (the state) on
+        ticks = sum(int(x) for x in fields[11:15])       # fields 14 to 17
+    except (OSError, ValueError):
+        return 0.0
+    return ticks / os.sysconf("SC_CLK_TCK")

@@ -4,8 +4,10 @@ For each graded name it forks a worker (:mod:`.worker`), hands it one case at a 
 the cases file's descriptor when the case is due: the worker never holds a case it is not yet
 running, nor another name's), forwards the worker's records to the ONE channel the grader
 reads, restarts a crashed or hung worker for the remaining cases (at most ``max_launches``
-processes per name) under deadlines of its own that no record of a worker can move (a fixed one
-per case, a hard end per name and per notebook, ``job_timeout``), and kills every leftover
+processes per name) under deadlines of its own that no record of a worker can move (per case,
+its CPU time limit on the worker's CPU clock and a fixed wall-clock backstop,
+:data:`~.confine.WALL_FACTOR` times the limit; a hard end per name and per notebook,
+``job_timeout``), and kills every leftover
 process and empties the scratch folder before each name's first worker (so nothing a worker
 saw reaches another name's). When it is PID 1 of its own PID namespace (the sandbox), ``kill(-1, SIGKILL)``
 cannot reach it, and clears everything else.
@@ -22,12 +24,14 @@ import shutil
 import signal
 import time
 
+from .confine import WALL_FACTOR, process_cpu_seconds
 from .failures import Policy, describe_status
 from .wire import CaseStream, FrameReader, frame, record_cap, write_all
 from .worker import worker_main
 
 GRACE = 1.0                        #: seconds the supervisor waits beyond a worker's own alarm
 TIMEOUTS_IN_A_ROW = 3              #: after this many timeouts the rest of a name is not run
+CPU_POLL = 0.1                     #: seconds between two looks at a running case's CPU clock
 #: The ``by`` of a case record the supervisor made (a worker's record with a ``by`` is refused),
 #: so the grader knows which messages no student code wrote.
 SUPERVISOR = "supervisor"
@@ -130,6 +134,7 @@ class NameSupervisor:
         self.label = "?"           # the cell running now
         self.pid = 0
         self.status = None         # the worker's wait status, once collected
+        self.cpu_start = 0.0       # the worker's CPU clock when the running case was due
 
     def emit(self, rec: dict) -> None:
         rec.setdefault("name", self.nj["name"])
@@ -242,20 +247,37 @@ class NameSupervisor:
         return "not run: this test used up its time (every restart included)"
 
     def case_deadline(self, i: int, now: float) -> float:
-        """Case ``i``'s deadline, fixed the first time it is asked for (nothing the worker
-        sends can move it)."""
+        """Case ``i``'s wall-clock backstop, fixed the first time it is asked for (nothing the
+        worker sends can move it); its CPU time starts counting from here."""
         if i not in self.deadlines:
-            self.deadlines[i] = now + float(self.limits["case_timeout"]) + GRACE
+            self.deadlines[i] = now + WALL_FACTOR * float(self.limits["case_timeout"]) + GRACE
+        self.cpu_start = process_cpu_seconds(self.pid)
         return min(self.deadlines[i], self.hard)
+
+    def next_event(self, reader: FrameReader, deadline: float, loading: bool):
+        """The worker's next event, ``"timeout"`` at the wall-clock ``deadline`` or, while a
+        case runs, once the worker has used the case's CPU time limit (plus :data:`GRACE`)
+        since the case was due."""
+        if loading:
+            return reader.next(deadline, self.worker_alive)
+        cpu_limit = float(self.limits["case_timeout"]) + GRACE
+        while True:
+            step = min(deadline, time.monotonic() + CPU_POLL)
+            event, payload = reader.next(step, self.worker_alive)
+            if event != "timeout" or step >= deadline:
+                return event, payload
+            if process_cpu_seconds(self.pid) - self.cpu_start >= cpu_limit:
+                return "timeout", None
 
     def watch(self, reader: FrameReader) -> bool:
         """Forward one worker's records. The deadlines are the supervisor's: ONE for loading
-        all the cells, one per case (fixed when the case is first due: after loading or after
-        the previous case's result), and the name's hard end; frames cannot move them."""
+        all the cells, one per case (its CPU time, and a wall-clock backstop fixed when the
+        case is first due: after loading or after the previous case's result), and the name's
+        hard end; frames cannot move them."""
         loading, started = True, time.monotonic()
         deadline = min(started + float(self.limits["load_timeout"]) + GRACE, self.hard)
         while True:
-            event, payload = reader.next(deadline, self.worker_alive)
+            event, payload = self.next_event(reader, deadline, loading)
             if event != "record":
                 return self.failed(event, loading, started)
             rec, raw = payload
@@ -339,8 +361,10 @@ class NameSupervisor:
         if self.next >= self.n:
             return False
         if event == "timeout":
-            self.settle("timeout", f"took longer than {self.limits['case_timeout']:g} s "
-                                   "(stopped by the supervisor)", spent)
+            limit = float(self.limits["case_timeout"])
+            self.settle("timeout", f"took more than {limit:g} s of CPU time or "
+                                   f"{WALL_FACTOR * limit:g} s in all (stopped by the "
+                                   "supervisor)", spent)
             if self.timeouts >= TIMEOUTS_IN_A_ROW:
                 self.settle_rest("not-run", f"not run: the {TIMEOUTS_IN_A_ROW} cases before "
                                             "it timed out")

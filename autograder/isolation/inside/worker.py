@@ -17,7 +17,7 @@ import signal
 import sys
 import time
 
-from .confine import install_filter
+from .confine import WALL_FACTOR, arm_case_timers, disarm_case_timers, install_filter
 from .failures import (MISSING_AFTER_REFUSAL, REFUSED_CODE, Policy, exc_mro, exc_name,
                        reference_module, refused_code, safe_str)
 from .wire import (MAX_FRAME, Budget, FrameReader, NotPlain, TooLarge, decode_value,
@@ -25,7 +25,7 @@ from .wire import (MAX_FRAME, Budget, FrameReader, NotPlain, TooLarge, decode_va
 
 
 class CaseTimeout(BaseException):
-    """Raised by the worker's alarm when a cell or a case runs out of time."""
+    """Raised by the worker's alarms when a cell or a case runs out of time."""
 
 
 def _on_alarm(signum, frame_):
@@ -150,12 +150,13 @@ class Worker:
                 args = decode_value(case["args"], unlimited)
                 kwargs = decode_value(case["kwargs"], unlimited)
                 target = self.ns[self.nj["name"]]
-                signal.setitimer(signal.ITIMER_REAL, timeout)
+                arm_case_timers(timeout)
                 value = target(*args, **kwargs) if self.nj["kind"] == "function" else target
             finally:
-                signal.setitimer(signal.ITIMER_REAL, 0)
+                disarm_case_timers()
         except CaseTimeout:
-            return {"kind": "timeout", "message": f"took longer than {timeout:g} s"}
+            return {"kind": "timeout", "message": f"took more than {timeout:g} s of CPU time "
+                                                  f"or {WALL_FACTOR * timeout:g} s in all"}
         except BaseException as exc:  # noqa: BLE001
             ref = reference_module(exc, self.policy.course_modules)
             if ref:
@@ -236,6 +237,7 @@ def _worker_setup(limits: dict, bpf: bytes = b"") -> Capture:
     except OSError:
         pass
     signal.signal(signal.SIGALRM, _on_alarm)
+    signal.signal(signal.SIGPROF, _on_alarm)   # a case's CPU time limit (confine)
     signal.signal(signal.SIGINT, signal.default_int_handler)
     capture = Capture(int(limits["output_bytes"]))
     sys.stdout = sys.stderr = capture
