@@ -32,7 +32,8 @@ import os
 import signal
 from dataclasses import dataclass, replace
 
-from .grading import Service, process_started, retry_or_fail
+from .grading import Service, process_started
+from .tries import retry_or_fail
 from .journal import Journal, Row
 
 #: fork, not spawn: the worker inherits the service as built (sources parsed, budgets measured)
