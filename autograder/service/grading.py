@@ -210,32 +210,13 @@ def _grade(svc: Service, row: Row, got: inbox.Collected, meter: Meter) -> list[N
     to_grade = [p for p in plans if p.kind == GRADE]
     results, subs = _run(svc, row, got.folder.parent.parent, [p.src for p in to_grade], meter)
     # every page is made before any leaves: a notebook that breaks the grader is found first
-    final_try = row.tries + 1 >= MAX_TRIES
     outcomes, out, counting = [], [], []
     for plan in to_grade:
-        rows = [r for r in results if r.notebook == plan.src.name]
-        auto = [r for r in rows if r.kind is not CellKind.MANUAL]
-        line = attempts_line(svc.policy.attempts - plan.used - 1, svc.policy.attempts)
-        items = tuple((r.name, r.score, r.max_score, r.status.value) for r in rows)
-        if auto and all(r.status is Status.GRADER_ERROR for r in auto):
-            if not final_try:   # charged already: the retry grades it again for nothing more
-                raise RuntimeError(f"the grader failed on every test of {plan.src.name}")
-            # the last try: the attempt stands, scored 0, and the gradebook keeps its own
-            outcomes.append(NotebookOutcome(plan.src.name, plan.digest, True, 0.0,
-                                            sum(r.max_score for r in auto), items))
-            out.append((plan.src.name, pages.failed_page(
-                row.student, plan.src.name, line, f"the grader failed on it {MAX_TRIES} times",
-                True), True))
-            continue
-        functions = tuple(r.name for r in auto if r.kind is CellKind.FUNCTION)
-        ranked = sum(r.score or 0.0 for r in auto if r.kind is CellKind.FUNCTION)
-        outcomes.append(NotebookOutcome(plan.src.name, plan.digest, True,
-                                        sum(r.score or 0.0 for r in auto),
-                                        sum(r.max_score for r in auto), items))
-        render = pages.open_page if svc.policy.is_open(dt.datetime.now(dt.timezone.utc)) \
-            else pages.closed_page
-        out.append((plan.src.name, render(row.student, plan.src.name, rows, line), True))
-        if _counts(svc, row, when, plan.src.name, ranked, functions):
+        outcome, html, counts = _judged(svc, row, plan, when,
+                                        [r for r in results if r.notebook == plan.src.name])
+        outcomes.append(outcome)
+        out.append((plan.src.name, html, True))
+        if counts:
             counting.append(plan.src.name)
     for plan in (p for p in plans if p.kind != GRADE):
         outcomes.append(NotebookOutcome(plan.src.name, plan.digest, graded=False))
@@ -250,17 +231,47 @@ def _grade(svc: Service, row: Row, got: inbox.Collected, meter: Meter) -> list[N
     return outcomes
 
 
+def _judged(svc: Service, row: Row, plan: _Plan, when: dt.datetime,
+            rows: list[CellResult]) -> tuple[NotebookOutcome, str, bool]:
+    """The outcome, page and whether it counts (the policy's ``counts``) of a graded notebook.
+
+    A notebook on which the grader failed every test raises, for a retry (its attempt charged
+    already), except on the last try: then the attempt stands, scored 0, with a page saying so,
+    and the gradebook keeps what it had."""
+    auto = [r for r in rows if r.kind is not CellKind.MANUAL]
+    line = attempts_line(svc.policy.attempts - plan.used - 1, svc.policy.attempts)
+    items = tuple((r.name, r.score, r.max_score, r.status.value) for r in rows)
+    most = sum(r.max_score for r in auto)
+    if auto and all(r.status is Status.GRADER_ERROR for r in auto):
+        if row.tries + 1 < MAX_TRIES:
+            raise RuntimeError(f"the grader failed on every test of {plan.src.name}")
+        return (NotebookOutcome(plan.src.name, plan.digest, True, 0.0, most, items),
+                pages.failed_page(row.student, plan.src.name, line,
+                                  f"the grader failed on it {MAX_TRIES} times", True), False)
+    functions = tuple(r.name for r in auto if r.kind is CellKind.FUNCTION)
+    ranked = sum(r.score or 0.0 for r in auto if r.kind is CellKind.FUNCTION)
+    render = pages.open_page if svc.policy.is_open(dt.datetime.now(dt.timezone.utc)) \
+        else pages.closed_page
+    return (NotebookOutcome(plan.src.name, plan.digest, True, sum(r.score or 0.0 for r in auto),
+                            most, items),
+            render(row.student, plan.src.name, rows, line),
+            _counts(svc, row, when, plan.src.name, ranked, functions))
+
+
 def _decide(svc: Service, row: Row, got: inbox.Collected, src: SourceNotebook, since: float,
             charged: set[str]) -> _Plan | None:
     """What becomes of ``src``'s notebook in the submission (None when it holds none). A
-    notebook an earlier try of this submission charged is graded again, and charged no more."""
+    notebook an earlier try of this submission charged is graded again and charged no more,
+    even if the student has since made it too large or taken it away (the grader then finds
+    it missing: 0)."""
     used = svc.journal.graded_since(row.student, src.name, since, other_than=row.id)
+    path = got.folder / f"{src.name}.ipynb"
     if src.name in got.too_large:
         size = got.too_large[src.name]
-        return _Plan(src, f"not read: {size} bytes", TOO_LARGE, used, size)
-    path = got.folder / f"{src.name}.ipynb"
+        kind = GRADE if src.name in charged else TOO_LARGE
+        return _Plan(src, f"not read: {size} bytes", kind, used, size)
     if not path.is_file():
-        return None
+        return _Plan(src, "not submitted", GRADE, used) if src.name in charged else None
     d = digest(path)
     if src.name in charged:
         return _Plan(src, d, GRADE, used)
