@@ -6,6 +6,7 @@
 - :mod:`.budget`   each notebook's time budget from the reference solution's own cost;
 - :mod:`.grading`  one submission: collect, charge, grade, hand out, record;
 - :mod:`.tries`    its tries: timed against its one budget, retried with back-off, given up;
+- :mod:`.recording` the counting notebooks and the gradebook written;
 - :mod:`.pages`    the pages (no key oracle before the due date);
 - :mod:`.handout`  pages placed where nbgrader's Fetch Feedback finds them;
 - :mod:`.loop`     notice and drain;  :mod:`.incremental` ``grade``'s results kept as it goes;

@@ -31,14 +31,13 @@ import sys
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ..course import file_lock
 from ..grade.batch import Options, grade_batch
-from ..model import Batch, CellKind, CellResult, SourceNotebook, Status
-from ..outputs import gradebook
-from . import budget, handout, inbox, pages
+from ..model import CellKind, CellResult, SourceNotebook, Status
+from . import budget, handout, inbox, pages, recording
 from .journal import Journal, NotebookOutcome, Row
 from .policy import Policy, attempts_line
-from .tries import MAX_TRIES, RETRY_SECONDS, Meter, give_up, last_page, retry_or_fail
+from .tries import (MAX_TRIES, RETRY_SECONDS, Meter, give_up, last_page, retry_or_fail,
+                    wait_for_gradebook)
 
 #: what a notebook can be in a submission (:func:`_decide`)
 GRADE, UNCHANGED, OVER, TOO_LARGE = "grade", "unchanged", "over the day's attempts", "too large"
@@ -109,7 +108,7 @@ def process_started(svc: Service, row: Row) -> str:
 def _try(svc: Service, row: Row, meter: Meter) -> str:
     folder = svc.work / str(row.id)
     try:
-        ping_gradebook(svc.db_url)                  # down: no sandbox time spent in vain
+        recording.ping_gradebook(svc.db_url)        # down: no sandbox time spent in vain
         shutil.rmtree(folder, ignore_errors=True)   # a killed run's half copy
         got = inbox.collect(svc.inbound, row.folder, row.student, row.ctime_ns, folder,
                             [s.name for s in svc.sources], max_notebook_bytes(svc), svc.uid_of)
@@ -137,8 +136,8 @@ def _try(svc: Service, row: Row, meter: Meter) -> str:
         give_up(svc, row, f"refused: {why}", f"it was refused: {shown}")
         return f"{row.student}: refused ({why})"
     except Exception as exc:  # noqa: BLE001 - one submission never stops the service
-        if _gradebook_unreachable(exc):
-            return _wait_for_gradebook(svc, row, exc)
+        if recording.gradebook_unreachable(exc):
+            return wait_for_gradebook(svc, row, exc)
         return retry_or_fail(svc, row, exc)
 
 
@@ -147,46 +146,6 @@ def max_notebook_bytes(svc: Service) -> int:
     (``Options.max_notebook_mb``), which would reject a larger one anyway, but only after
     reading and parsing it."""
     return int(svc.opts.max_notebook_mb * 2**20)
-
-
-def _gradebook_unreachable(exc: BaseException) -> bool:
-    """Whether ``exc`` says the gradebook's database could not be reached or dropped the
-    connection (a PostgreSQL server stopped or restarting, a locked SQLite file), rather than
-    anything about the submission."""
-    try:
-        from sqlalchemy.exc import DBAPIError, OperationalError
-    except ImportError:
-        return False
-    return isinstance(exc, OperationalError) or (
-        isinstance(exc, DBAPIError) and bool(exc.connection_invalidated))
-
-
-def ping_gradebook(db_url: str | None) -> None:
-    """Open and close one connection to a gradebook server (SQLite files and no gradebook
-    are skipped): raises SQLAlchemy's ``OperationalError`` when it cannot be reached, before
-    nbgrader's ``Gradebook`` would take the failure for an empty database and try to create
-    the course again."""
-    if db_url is None or db_url.startswith("sqlite"):
-        return
-    from sqlalchemy import create_engine, text
-
-    engine = create_engine(db_url)
-    try:
-        with engine.connect() as con:
-            con.execute(text("SELECT 1"))
-    finally:
-        engine.dispose()
-
-
-def _wait_for_gradebook(svc: Service, row: Row, exc: BaseException) -> str:
-    """Keep the submission queued for as long as the gradebook is down: nothing was counted
-    (the attempts are written only with ``done``), and this try is not held against it."""
-    first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-    svc.journal.postpone(row, f"gradebook unreachable: {first}", RETRY_SECONDS,
-                         count_try=False)
-    print(f"error: the gradebook cannot be reached ({first}); submission {row.folder} is kept "
-          f"in the queue and tried again in {RETRY_SECONDS:g} s", file=sys.stderr)
-    return f"{row.student}: gradebook unreachable; kept and retried later"
 
 
 @dataclass
@@ -227,7 +186,7 @@ def _grade(svc: Service, row: Row, got: inbox.Collected, meter: Meter) -> list[N
         if graded:
             handout.write_atomic(last_page(svc, row.student, notebook), html, 0o600)
         handout.hand_out(svc.course, svc.exchange, got.folder, row.student, notebook, html)
-    _record(svc, row.student, got.folder, counting, results, subs)
+    recording.record(svc, row.student, got.folder, counting, results, subs)
     return outcomes
 
 
@@ -336,27 +295,3 @@ def _counts(svc: Service, row: Row, when: dt.datetime, notebook: str, ranked: fl
         best = svc.journal.best_score(row.student, notebook, row.id, functions)
         return best is None or ranked >= best
     return True
-
-
-def _record(svc: Service, student: str, collected: Path, counting: list[str],
-            results: list[CellResult], subs: dict) -> None:
-    """The counting notebooks into ``submitted/`` and their automatic scores into the gradebook
-    (markers' scores and comments untouched: :func:`autograder.outputs.gradebook.sync`)."""
-    if not counting:
-        return
-    ping_gradebook(svc.db_url)      # submitted/ and the gradebook change together or not at all
-    handout.keep_counting(svc.course, collected, student, counting)
-    if svc.db_url is None:
-        return
-    rows = [r for r in results if r.notebook in counting]
-    kept = {k: v for k, v in subs.items() if k[1] in counting}
-    with _gradebook_turn(svc):
-        gradebook.sync(Batch(rows, kept, [student]), svc.sources,
-                       submitted=Path(svc.course) / "submitted", out=Path(svc.course),
-                       db_url=svc.db_url)
-
-
-def _gradebook_turn(svc: Service):
-    """One worker process at a time writes the gradebook: two writers of a SQLite gradebook
-    would meet its lock (nbgrader's engine waits only seconds) and retry the whole submission."""
-    return file_lock(Path(svc.course) / "service" / "gradebook.lock")

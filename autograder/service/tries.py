@@ -90,6 +90,18 @@ def retry_or_fail(svc: Service, row: Row, exc: BaseException, first: float = RET
     return f"{row.student}: {later}"
 
 
+def wait_for_gradebook(svc: Service, row: Row, exc: BaseException) -> str:
+    """Keep the submission queued for as long as the gradebook is down, this try not held
+    against it (the course's fault): an attempt it was charged stays charged once, and the
+    retry charges nothing more."""
+    first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+    svc.journal.postpone(row, f"gradebook unreachable: {first}", RETRY_SECONDS,
+                         count_try=False)
+    print(f"error: the gradebook cannot be reached ({first}); submission {row.folder} is kept "
+          f"in the queue and tried again in {RETRY_SECONDS:g} s", file=sys.stderr)
+    return f"{row.student}: gradebook unreachable; kept and retried later"
+
+
 def give_up(svc: Service, row: Row, error: str, why: str) -> None:
     """Leave ``row`` ``failed`` (``error`` for the instructor), then hand each of its notebooks a
     page saying so (``why``, for the student). Never raises for the pages' sake: the row is
