@@ -34,8 +34,8 @@ from .policy import attempts_line
 if TYPE_CHECKING:
     from .grading import Service
 
-#: seconds before a failed try (a full disk, the gradebook down, a grader error) is tried again,
-#: doubled for each further try
+#: seconds before a failed try is tried again (:func:`retry_delay` doubles it for each further
+#: counted try; a full disk or a gradebook down, the course's faults, wait this long each time)
 RETRY_SECONDS = 60.0
 #: tries before a submission is left ``failed``
 MAX_TRIES = 5
