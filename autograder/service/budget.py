@@ -76,3 +76,28 @@ def budgets(costs: dict[str, float], policy: Policy,
     extra = allowance or {}
     return {name: max(policy.floor_seconds, policy.margin * cost) + extra.get(name, 0.0)
             for name, cost in costs.items()}
+
+
+#: seconds of budget below which a try grades nothing: the sandbox alone takes about a second to
+#: start, so less left is a budget used up
+MIN_TRY_SECONDS = 1.0
+
+
+def submission_budget(budgets: dict[str, float], notebooks: list[str], default: float) -> float:
+    """The time budget of a submission grading ``notebooks``: the sum of their budgets
+    (``default`` for one without). One budget for the whole submission and all its tries, not
+    one per notebook per try: five sleeping notebooks re-queued four times held a worker 25
+    budgets long while the next student waited (issue 33)."""
+    return sum(budgets.get(name, default) for name in notebooks)
+
+
+def batch_timeout(left: float, notebooks: int, jobs: int, longest: float) -> tuple[float, int]:
+    """``(job timeout, waves)`` of one batch of ``notebooks`` run ``jobs`` at a time with
+    ``left`` seconds of the submission's budget: each notebook gets at most ``longest`` (the
+    largest of their own budgets) and the waves of ``jobs`` notebooks together at most ``left``,
+    so the batch holds its worker no longer than the budget left (plus the sandbox's own
+    start-up and clean-up)."""
+    if notebooks < 1 or jobs < 1:
+        raise ValueError(f"a batch needs notebooks and jobs, got {notebooks} and {jobs}")
+    waves = -(-notebooks // jobs)
+    return min(longest, left / waves), waves

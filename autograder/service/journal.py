@@ -2,18 +2,27 @@
 
 SQLite in write-ahead-log mode in the course folder (``<course>/service/journal.db``). Each
 submission folder of the exchange's inbound gets one row (its name is unique: noticing it again
-changes nothing) that moves ``queued -> grading -> done`` (or ``failed``, for a submission
-refused by the collect rules). A service killed while a row is ``grading`` finds it so on
-restart and puts it back in the queue (:meth:`Journal.recover`): nothing is lost. The attempts a
-grading consumed are written in the same transaction that marks the row ``done``, keyed by
-(submission, notebook): an attempt is counted once, whatever was interrupted before.
+changes nothing) that moves ``queued -> grading -> done`` (or ``failed``: refused by the collect
+rules, out of tries or out of time). A service killed while a row is ``grading`` finds it so on
+restart and puts it back in the queue (:meth:`Journal.recover`): nothing is lost.
+
+An attempt is charged before anything of it leaves: :meth:`Journal.charge` writes each notebook's
+row (its digest, and ``graded`` 1 for a notebook to be graded) in one transaction before the
+sandbox runs and before any page is written, keyed by (submission, notebook), so a retry of the
+same submission finds its charge and never charges again, and an exception anywhere later
+(a crash, a kill, a student's notebook that breaks the grader) leaves the attempt counted. The
+items' scores follow in the transaction that marks the row ``done`` (:meth:`Journal.finish`).
 
 Tables (documented for the class report, which reads ``attempts``):
 
 - ``submissions(id, folder, student, ctime_ns, noticed, state, tries, retry_at, error,
-  finished, started)`` (``started``: when its last grading began, epoch s);
+  finished, started, spent, reserved)`` (``started``: when its last try began, epoch s;
+  ``spent``: the seconds of grading its tries have used, against its time budget; ``reserved``:
+  the part of ``spent`` the running try charged ahead, given back if the service is killed);
 - ``notebooks(submission_id, student, notebook, time, digest, graded, score, max_score)``: one
-  row per notebook a submission held; ``graded`` 0 when it was unchanged or over the budget;
+  row per notebook a submission held; ``graded`` 0 when it was unchanged, over the day's
+  attempts or over the size limit; ``score`` NULL while a charged attempt is being graded, 0 for
+  one whose submission failed;
 - ``attempts(submission_id, student, notebook, item, time, score, max_score, status)``: one
   row per graded item of a graded notebook (``time``: the submission's, seconds since the
   epoch, as the exchange's kernel recorded it).
@@ -31,7 +40,8 @@ CREATE TABLE IF NOT EXISTS submissions (
     id INTEGER PRIMARY KEY, folder TEXT UNIQUE NOT NULL, student TEXT NOT NULL,
     ctime_ns INTEGER NOT NULL, noticed REAL NOT NULL, state TEXT NOT NULL DEFAULT 'queued',
     tries INTEGER NOT NULL DEFAULT 0, retry_at REAL NOT NULL DEFAULT 0, error TEXT DEFAULT '',
-    finished REAL NOT NULL DEFAULT 0, started REAL NOT NULL DEFAULT 0);
+    finished REAL NOT NULL DEFAULT 0, started REAL NOT NULL DEFAULT 0,
+    spent REAL NOT NULL DEFAULT 0, reserved REAL NOT NULL DEFAULT 0);
 CREATE TABLE IF NOT EXISTS notebooks (
     submission_id INTEGER NOT NULL, student TEXT NOT NULL, notebook TEXT NOT NULL,
     time REAL NOT NULL, digest TEXT NOT NULL, graded INTEGER NOT NULL,
@@ -43,6 +53,9 @@ CREATE TABLE IF NOT EXISTS attempts (
 CREATE INDEX IF NOT EXISTS sub_state ON submissions (state, student);
 """
 STATES = ("queued", "grading", "done", "failed")
+#: columns added since the first journals: a journal written before them gets them on opening
+_ADDED = {name: "REAL NOT NULL DEFAULT 0" for name in ("started", "spent", "reserved")}
+_ROW = "id, folder, student, ctime_ns, state, tries, spent"
 
 
 @dataclass(frozen=True)
@@ -54,7 +67,8 @@ class Row:
     student: str
     ctime_ns: int
     state: str
-    tries: int
+    tries: int          #: tries begun before this one (:meth:`Journal.start` counts the next)
+    spent: float = 0.0  #: seconds of grading used by its earlier tries
 
 
 @dataclass(frozen=True)
@@ -80,8 +94,9 @@ class Journal:
         self.db.execute("PRAGMA synchronous=FULL")
         self.db.executescript(SCHEMA)
         columns = {c[1] for c in self.db.execute("PRAGMA table_info(submissions)")}
-        if "started" not in columns:    # a journal written before the column existed
-            self.db.execute("ALTER TABLE submissions ADD COLUMN started REAL NOT NULL DEFAULT 0")
+        for column, kind in _ADDED.items():
+            if column not in columns:
+                self.db.execute(f"ALTER TABLE submissions ADD COLUMN {column} {kind}")
 
     def close(self) -> None:
         self.db.close()
@@ -95,26 +110,33 @@ class Journal:
 
     def row_of(self, folder: str) -> Row | None:
         """The journal's row of the inbound ``folder``."""
-        found = self.db.execute("SELECT id, folder, student, ctime_ns, state, tries FROM "
-                                "submissions WHERE folder=?", (folder,)).fetchone()
+        found = self.db.execute(f"SELECT {_ROW} FROM submissions WHERE folder=?",
+                                (folder,)).fetchone()
         return Row(*found) if found else None
 
     def recover(self) -> int:
-        """Put back in the queue what a killed service left ``grading``; how many."""
-        return self.db.execute("UPDATE submissions SET state='queued' WHERE state='grading'"
-                               ).rowcount
+        """Put back in the queue what a killed service left ``grading``; how many. The time
+        their tries charged ahead is given back: the service's stop is no student's doing."""
+        return self.db.execute("UPDATE submissions SET state='queued', "
+                               "spent=MAX(0, spent - reserved), reserved=0 "
+                               "WHERE state='grading'").rowcount
 
     def next_ready(self, now: float | None = None) -> Row | None:
-        """The next submission to grade: round-robin over students (the one served longest
-        ago, or never, first), each student's own submissions in the order the exchange saw
-        them. A student's later submissions wait behind their own, never the class's: none
-        is handed out while another of the same student is being graded, nor while an
-        earlier one of theirs is postponed for a retry (a gradebook or a disk that failed it),
-        or the later would be graded first and the earlier would then replace it as the last."""
+        """The next submission to grade: students ranked by when a try of theirs last
+        started (never first, then the longest ago), each student's own submissions in the order
+        the exchange saw them. Ranking by the last start, not the last finish, puts a student
+        whose submission was just tried (and is queued again for a retry, or followed by another
+        of theirs) behind everyone who was not: a retry never jumps the queue.
+
+        A student's later submissions wait behind their own, never the class's: none is handed
+        out while another of the same student is being graded, nor while an earlier one of
+        theirs is postponed for a retry (a gradebook or a disk that failed it), or the later
+        would be graded first and the earlier would then replace it as the last."""
         now = time.time() if now is None else now
+        columns = ", ".join(f"s.{c.strip()}" for c in _ROW.split(","))
         cur = self.db.execute(
-            "SELECT s.id, s.folder, s.student, s.ctime_ns, s.state, s.tries FROM submissions s "
-            "LEFT JOIN (SELECT student, MAX(finished) AS last FROM submissions "
+            f"SELECT {columns} FROM submissions s "
+            "LEFT JOIN (SELECT student, MAX(started) AS last FROM submissions "
             "           GROUP BY student) d "
             "ON d.student = s.student "
             "WHERE s.state='queued' AND s.retry_at <= ? AND NOT EXISTS (SELECT 1 FROM "
@@ -126,8 +148,8 @@ class Journal:
         return Row(*found) if found else None
 
     def start(self, row: Row) -> None:
-        self.db.execute("UPDATE submissions SET state='grading', tries=tries+1, started=? "
-                        "WHERE id=?", (time.time(), row.id))
+        self.db.execute("UPDATE submissions SET state='grading', tries=tries+1, started=?, "
+                        "reserved=0 WHERE id=?", (time.time(), row.id))
 
     def postpone(self, row: Row, why: str, delay: float, count_try: bool = True) -> None:
         """Back to the queue, not before ``delay`` seconds (e.g. a full disk). With
@@ -141,9 +163,47 @@ class Journal:
         """The submission changed after it was noticed: its time is the newer one."""
         self.db.execute("UPDATE submissions SET ctime_ns=? WHERE id=?", (int(ctime_ns), row.id))
 
+    def reserve(self, row: Row, seconds: float) -> None:
+        """Charge ``row`` ``seconds`` its running try may use, before it uses them: a worker
+        that dies meanwhile leaves them charged (its next :meth:`start` keeps them), a
+        service killed meanwhile gives them back (:meth:`recover`)."""
+        self.db.execute("UPDATE submissions SET spent=spent + ?, reserved=reserved + ? "
+                        "WHERE id=?", (float(seconds), float(seconds), row.id))
+
+    def spend(self, row: Row, seconds: float) -> None:
+        """Add ``seconds`` (negative: give back) to the grading time ``row`` has used; what was
+        reserved is settled."""
+        self.db.execute("UPDATE submissions SET spent=MAX(0, spent + ?), reserved=0 WHERE id=?",
+                        (float(seconds), row.id))
+
+    def spent(self, row: Row) -> float:
+        """The seconds of grading ``row``'s tries have used so far."""
+        found = self.db.execute("SELECT spent FROM submissions WHERE id=?", (row.id,)).fetchone()
+        return found[0] if found else 0.0
+
     def fail(self, row: Row, why: str) -> None:
-        self.db.execute("UPDATE submissions SET state='failed', error=?, finished=? "
-                        "WHERE id=?", (why, time.time(), row.id))
+        """``row`` is ``failed`` (``why`` kept for the instructor); the attempts it was charged
+        stay charged and score 0."""
+        with self._transaction():
+            self.db.execute("UPDATE submissions SET state='failed', error=?, finished=? "
+                            "WHERE id=?", (why, time.time(), row.id))
+            self.db.execute("UPDATE notebooks SET score=0 WHERE submission_id=? AND graded=1 "
+                            "AND score IS NULL", (row.id,))
+
+    def charge(self, row: Row, notebooks: list[tuple[str, str, bool]]) -> None:
+        """Record ``row``'s notebooks, ``(notebook, digest, graded)`` each, in one transaction:
+        a graded one is a charged attempt from now on, whatever happens to the grading."""
+        when = row.ctime_ns / 1e9
+        with self._transaction():
+            for notebook, digest, graded in notebooks:
+                self.db.execute(
+                    "INSERT OR REPLACE INTO notebooks VALUES (?, ?, ?, ?, ?, ?, NULL, NULL)",
+                    (row.id, row.student, notebook, when, digest, int(graded)))
+
+    def charged(self, row: Row) -> set[str]:
+        """The notebooks an earlier try of ``row`` charged as graded attempts."""
+        return {n for (n,) in self.db.execute(
+            "SELECT notebook FROM notebooks WHERE submission_id=? AND graded=1", (row.id,))}
 
     def finish(self, row: Row, outcomes: list[NotebookOutcome]) -> None:
         """Mark ``row`` done and record its notebooks and items, in one transaction."""
@@ -158,6 +218,9 @@ class Journal:
                     self.db.execute(
                         "INSERT OR REPLACE INTO attempts VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
                         (row.id, row.student, o.notebook, item, when, score, max_score, status))
+            # a charged notebook the last try no longer held: the attempt stands, scored 0
+            self.db.execute("UPDATE notebooks SET score=0 WHERE submission_id=? AND graded=1 "
+                            "AND score IS NULL", (row.id,))
             self.db.execute("UPDATE submissions SET state='done', error='', finished=? "
                             "WHERE id=?", (time.time(), row.id))
 
@@ -173,17 +236,23 @@ class Journal:
                 return False
         return _Tx()
 
-    def graded_since(self, student: str, notebook: str, since: float) -> int:
-        """Graded attempts of ``notebook`` by ``student`` at or after ``since`` (epoch s)."""
+    def graded_since(self, student: str, notebook: str, since: float,
+                     other_than: int | None = None) -> int:
+        """Graded (charged) attempts of ``notebook`` by ``student`` at or after ``since``
+        (epoch s), leaving out submission ``other_than``'s."""
         return self.db.execute(
             "SELECT COUNT(*) FROM notebooks WHERE student=? AND notebook=? AND graded=1 "
-            "AND time >= ?", (student, notebook, since)).fetchone()[0]
+            "AND time >= ? AND submission_id IS NOT ?",
+            (student, notebook, since, other_than)).fetchone()[0]
 
-    def last_digest(self, student: str, notebook: str) -> str | None:
-        """The digest of ``student``'s last graded version of ``notebook``."""
+    def last_digest(self, student: str, notebook: str,
+                    other_than: int | None = None) -> str | None:
+        """The digest of ``student``'s last graded (charged) version of ``notebook``, leaving
+        out submission ``other_than``'s."""
         found = self.db.execute(
             "SELECT digest FROM notebooks WHERE student=? AND notebook=? AND graded=1 "
-            "ORDER BY time DESC, submission_id DESC LIMIT 1", (student, notebook)).fetchone()
+            "AND submission_id IS NOT ? ORDER BY time DESC, submission_id DESC LIMIT 1",
+            (student, notebook, other_than)).fetchone()
         return found[0] if found else None
 
     def best_score(self, student: str, notebook: str, before: int,

@@ -73,6 +73,27 @@ def not_graded_page(student: str, notebook: str, line: str, reopens: dt.datetime
     return page(f"{notebook}: feedback for {student}", body, feedback._STYLE)
 
 
+def too_large_page(student: str, notebook: str, line: str, size: int, limit: int) -> str:
+    """The page of a notebook over the size limit: not read, not graded, no attempt charged."""
+    body = [f"<h1>{e(notebook)}</h1>", f"<p class='attempts'><b>{e(line)}</b></p>",
+            f"<p class='msg'>This version was not graded and cost no attempt: the file is "
+            f"{size / 2**20:.1f} MB, over the limit of {limit / 2**20:g} MB a notebook may be "
+            "(huge outputs?). Clear all outputs (Edit &gt; Clear Outputs of All Cells), save "
+            "and submit again.</p>"]
+    return page(f"{notebook}: feedback for {student}", body, feedback._STYLE)
+
+
+def failed_page(student: str, notebook: str, line: str, why: str, charged: bool) -> str:
+    """The page of a notebook whose submission could not be graded (``why``, in words for the
+    student); ``charged``: it counted as a graded attempt, scored 0."""
+    cost = ("It counted as a graded attempt of this notebook, scored 0 (what counts for your "
+            "mark is unchanged)." if charged else "It cost no graded attempt.")
+    body = [f"<h1>{e(notebook)}</h1>", f"<p class='attempts'><b>{e(line)}</b></p>",
+            f"<p class='msg'>This submission could not be graded: {e(why)}. {cost} Submit "
+            "again to be graded; your instructor has the details.</p>"]
+    return page(f"{notebook}: feedback for {student}", body, feedback._STYLE)
+
+
 def with_line(html: str, line: str) -> str:
     """A page with its attempts line replaced by ``line``."""
     return _LINE.sub(lambda _m: f"<p class='attempts'><b>{e(line)}</b></p>", html, count=1)

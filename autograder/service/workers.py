@@ -17,10 +17,11 @@ its own and exits.
   ``opts.jobs`` sandbox slots (``jobs // workers``, at least one) and starts only when its share
   is free. Not all of them when it is alone: a submission that burns its budget would then hold
   every slot, and the next student's would wait for it.
-- **Order and fairness** are the journal's (:meth:`~.journal.Journal.next_ready`): students in
-  the order the exchange saw them, round-robin, and no second submission of a student while one
-  of theirs is in flight, so a student whose notebook burns its budget holds one worker and
-  waits behind their own submissions; the class goes on with the others.
+- **Order and fairness** are the journal's (:meth:`~.journal.Journal.next_ready`): students
+  round-robin by when a try of theirs last started, so a retry goes behind everyone not just
+  served, and no second submission of a student while one of theirs is in flight, so a student
+  whose notebooks burn their budget holds one worker for that one budget (all its tries
+  together: :mod:`.tries`) and waits behind their own submissions; the class goes on.
 """
 
 from __future__ import annotations
@@ -32,7 +33,8 @@ import os
 import signal
 from dataclasses import dataclass, replace
 
-from .grading import Service, process_started, retry_or_fail
+from .grading import Service, process_started
+from .tries import retry_or_fail
 from .journal import Journal, Row
 
 #: fork, not spawn: the worker inherits the service as built (sources parsed, budgets measured)

@@ -111,7 +111,8 @@ def test_a_full_disk_keeps_the_submission_and_retries(service, q1, monkeypatch, 
     assert said == ["fd123: disk full; kept and retried later"]
     assert "the disk is full" in capsys.readouterr().err
     assert svc.journal.states()["queued"] == 1 and svc.journal.attempts_rows() == []
-    assert svc.journal.graded_since("fd123", q1.name, 0) == 0
+    # charged before any page was written, and once: the retry does not charge again
+    assert svc.journal.graded_since("fd123", q1.name, 0) == 1
     loop.drain(svc, now=later())                          # the retry, after the delay
     assert svc.journal.states()["done"] == 1
     assert svc.journal.graded_since("fd123", q1.name, 0) == 1
@@ -162,14 +163,18 @@ def test_grade_keeps_what_it_graded_when_stopped(tmp_path, q1, mode):
             assert float(r["score"]) == pytest.approx(points[name]), r
 
 
-def test_a_grader_failure_charges_no_attempt(service, q1, monkeypatch):
+def test_a_grader_failure_is_charged_once_and_retried_before_any_page(service, q1,
+                                                                       monkeypatch):
+    """The attempt is charged before the sandbox runs (an exception anywhere later must not
+    leave it free: issue 33), no page leaves while the grader fails, and the retry that grades
+    it charges nothing more."""
     import dataclasses
 
     from autograder.model import Status
     from autograder.service import grading
 
     svc = service()
-    submit(svc, "ge123", {q1.name: honest(q1, "ge123")})
+    folder = submit(svc, "ge123", {q1.name: honest(q1, "ge123")})
     real = grading.grade_batch
 
     def failing(*args, **kwargs):
@@ -180,10 +185,13 @@ def test_a_grader_failure_charges_no_attempt(service, q1, monkeypatch):
     monkeypatch.setattr(grading, "grade_batch", failing)
     loop.notice(svc, now=later())
     assert loop.drain(svc) == ["ge123: grader error; retried later"]
-    assert svc.journal.graded_since("ge123", q1.name, 0) == 0
+    assert svc.journal.graded_since("ge123", q1.name, 0) == 1
+    with pytest.raises(FileNotFoundError):
+        exchange_page(svc, folder, q1.name)
     monkeypatch.setattr(grading, "grade_batch", real)
     loop.drain(svc, now=later())
     assert svc.journal.graded_since("ge123", q1.name, 0) == 1
+    assert attempts_line(4, 5) in exchange_page(svc, folder, q1.name)
 
 
 def test_a_submission_changing_after_it_was_noticed_is_retimed(service, q1):
@@ -220,7 +228,7 @@ def test_a_gradebook_down_mid_run_is_caught_up(service, q1, monkeypatch):
     monkeypatch.setattr(gradebook, "sync", down)
     loop.notice(svc, now=later())
     assert loop.drain(svc) == ["db123: grader error; retried later"]
-    assert svc.journal.graded_since("db123", q1.name, 0) == 0     # nothing counted yet
+    assert svc.journal.graded_since("db123", q1.name, 0) == 1     # charged, once
     monkeypatch.setattr(gradebook, "sync", real)                  # the server is back
     loop.drain(svc, now=later())
     assert svc.journal.graded_since("db123", q1.name, 0) == 1

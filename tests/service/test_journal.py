@@ -109,3 +109,61 @@ def test_a_later_submission_waits_behind_its_students_postponed_one(tmp_path):
     assert j.next_ready(later) is None                    # still behind ana+0, now grading
     j.finish(j.row_of("ana+0"), [])
     assert j.next_ready(later).folder == "ana+1"
+
+
+def test_a_retry_goes_behind_a_student_not_just_served(tmp_path):
+    """Students rank by their last start: ana's submission, just tried and queued again for a
+    retry that is already due, waits behind bo's, never tried (issue 33: a retry re-queued at
+    the head of the queue, 53 times in 60 s)."""
+    import time
+
+    j = Journal(tmp_path / "j.db")
+    j.notice("bo+0", "bo", 50)                  # bo was served once before
+    j.start(j.next_ready())
+    j.finish(j.row_of("bo+0"), [])
+    j.notice("ana+0", "ana", 100)
+    j.start(j.next_ready())
+    j.postpone(j.row_of("ana+0"), "grader error", 0)
+    j.notice("bo+1", "bo", 200)
+    assert j.next_ready(time.time() + 1).folder == "bo+1"
+
+
+def test_a_charge_is_recorded_once_and_outlives_a_failure(tmp_path):
+    j = Journal(tmp_path / "j.db")
+    j.notice("ana+0", "ana", 10**9)
+    row = j.next_ready()
+    j.start(row)
+    j.charge(row, [("q1_imaging", "d1", True), ("q2_nuclear", "d2", False)])
+    j.charge(row, [("q1_imaging", "d1", True), ("q2_nuclear", "d2", False)])   # a retry
+    assert j.charged(row) == {"q1_imaging"}
+    assert j.graded_since("ana", "q1_imaging", 0) == 1
+    assert j.graded_since("ana", "q2_nuclear", 0) == 0
+    assert j.graded_since("ana", "q1_imaging", 0, other_than=row.id) == 0
+    assert j.last_digest("ana", "q1_imaging") == "d1"
+    assert j.last_digest("ana", "q1_imaging", other_than=row.id) is None
+    j.fail(row, "out of tries")
+    assert j.graded_since("ana", "q1_imaging", 0) == 1        # still charged ...
+    score = j.db.execute("SELECT score FROM notebooks WHERE notebook='q1_imaging'").fetchone()
+    assert score == (0.0,)                                    # ... and scored 0
+
+
+def test_the_time_reserved_by_a_try_is_kept_unless_the_service_was_killed(tmp_path):
+    j = Journal(tmp_path / "j.db")
+    j.notice("ana+0", "ana", 1)
+    row = j.next_ready()
+    j.start(row)
+    j.reserve(row, 30.0)
+    assert j.spent(row) == 30.0
+    j.close()                                   # the service is killed mid-try
+    j = Journal(tmp_path / "j.db")
+    assert j.recover() == 1 and j.spent(row) == 0.0           # its stop is no student's doing
+    j.start(row)
+    j.reserve(row, 30.0)                        # this try's worker dies: nothing settles it
+    j.postpone(row, "worker died", 0)
+    j.start(row)                                # the next try keeps what the dead one held
+    j.spend(row, 5.0)
+    assert j.spent(row) == 35.0
+    j.close()
+    j = Journal(tmp_path / "j.db")
+    j.recover()
+    assert j.spent(row) == 35.0                 # nothing reserved any more: nothing given back

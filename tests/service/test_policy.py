@@ -55,3 +55,14 @@ def test_the_window_is_the_local_calendar_day_across_summer_time():
 
 def test_attempts_line():
     assert attempts_line(2, 5) == "2 of 5 graded attempts left today"
+
+
+def test_the_paragraph_says_an_attempt_is_charged_even_if_its_grading_fails():
+    """Students read the service's rules in the release's first cell: that includes the one
+    a student could otherwise take for a free attempt (issue 33, finding 4)."""
+    from autograder.service.policy import policy_paragraph
+
+    text = policy_paragraph(Policy(attempts=2))
+    assert "costs its attempt as soon as the service takes it, even if its grading then " \
+           "fails" in text
+    assert "**2 graded attempts per notebook per day**" in text

@@ -63,7 +63,9 @@ def test_a_postgres_gradebook_restarted_mid_run_is_caught_up(tmp_path, sources, 
     other = submit(svc, "pq456", {q1.name: honest(q1, "pq456")})
     loop.notice(svc, now=later())
     assert loop.drain(svc) == [f"pq456: {DOWN}"]
-    assert svc.journal.graded_since("pg123", q1.name, 0) == 0      # nothing counted yet
+    # pg123's attempt was charged before the sandbox ran; pq456's try stopped before anything
+    assert svc.journal.graded_since("pg123", q1.name, 0) == 1
+    assert svc.journal.graded_since("pq456", q1.name, 0) == 0
     assert svc.journal.states()["queued"] == 2
 
     pg_server.resume()
@@ -83,7 +85,7 @@ def test_a_postgres_gradebook_restarted_mid_run_is_caught_up(tmp_path, sources, 
         for name, test_id, points in q1.graded:
             assert scores[test_id] == pytest.approx(points), (student, name)
     assert points_of(q1, target) > 0
-    # attempts: one per graded submission, each item once; the failed tries charged nothing
+    # attempts: one per graded submission, each item once; the retries charged nothing more
     assert svc.journal.graded_since("pg123", q1.name, 0) == 2
     assert svc.journal.graded_since("pq456", q1.name, 0) == 1
     items = sorted([n for n, _, _ in q1.graded] + [g for g, _ in q1.manual])

@@ -148,3 +148,19 @@ def test_a_second_watch_on_the_same_course_is_refused(tmp_path):
         hold_lock(tmp_path)
     first.close()
     hold_lock(tmp_path).close()            # free again once the first has stopped
+
+
+def test_a_batch_stays_within_what_is_left_of_its_submissions_budget():
+    """Six notebooks two at a time are three waves: each wave gets at most the largest
+    notebook budget and the three together at most what is left (computed by hand here)."""
+    from autograder.service.tries import retry_delay
+
+    assert budget.submission_budget({"a": 10.0, "b": 20.0}, ["a", "b", "c"], 5.0) == 35.0
+    assert budget.batch_timeout(left=60.0, notebooks=6, jobs=2, longest=10.0) == (10.0, 3)
+    assert budget.batch_timeout(left=15.0, notebooks=6, jobs=2, longest=10.0) == (5.0, 3)
+    assert budget.batch_timeout(left=15.0, notebooks=1, jobs=2, longest=10.0) == (10.0, 1)
+    with pytest.raises(ValueError):
+        budget.batch_timeout(left=15.0, notebooks=0, jobs=2, longest=10.0)
+    assert [retry_delay(60.0, k) for k in (1, 2, 3, 4)] == [60.0, 120.0, 240.0, 480.0]
+    with pytest.raises(ValueError):
+        retry_delay(60.0, 0)
