@@ -19,6 +19,7 @@ from pathlib import Path
 
 from ..grade.batch import Options, grade_batch
 from ..course import ASSIGNMENT
+from ..isolation.inside.confine import WALL_FACTOR
 from ..isolation.inside.supervisor import GRACE, TIMEOUTS_IN_A_ROW
 from ..exercises import REGISTRY
 from ..model import CellKind, SourceNotebook
@@ -55,11 +56,13 @@ HANGS_ALLOWED = 2
 
 def hang_allowance(sources: list[SourceNotebook], case_timeout: float) -> dict[str, float]:
     """``{notebook: seconds}`` the sandbox may spend stopping graded functions that hang: each
-    is stopped after :data:`TIMEOUTS_IN_A_ROW` cases of ``case_timeout`` (plus the
-    supervisor's grace), room for :data:`HANGS_ALLOWED` of them. Added to a budget, one or two
-    hanging functions cost their own points only, as under ``grade`` (an instructor's
-    playtest: two hung cases used up a 20 s budget and a correct function beside them scored 0)."""
-    per_function = TIMEOUTS_IN_A_ROW * (case_timeout + GRACE)
+    is stopped after :data:`TIMEOUTS_IN_A_ROW` cases, each at most the case limit's wall-clock
+    backstop (:data:`~autograder.isolation.inside.confine.WALL_FACTOR` × ``case_timeout``: a case
+    that sleeps uses no CPU time) plus the supervisor's grace, room for :data:`HANGS_ALLOWED`
+    of them. Added to a budget, one or two hanging functions cost their own points only, as
+    under ``grade`` (an instructor's playtest: two hung cases used up a 20 s budget and a
+    correct function beside them scored 0)."""
+    per_function = TIMEOUTS_IN_A_ROW * (WALL_FACTOR * case_timeout + GRACE)
 
     def runs_code(name: str) -> bool:   # as the batch judges it: an unknown name is a function
         return getattr(REGISTRY.get(name), "kind", CellKind.FUNCTION) is CellKind.FUNCTION

@@ -87,18 +87,19 @@ def test_budgets_come_from_the_reference_cost(q1, mode):
 
 
 def test_a_budget_leaves_room_for_two_graded_functions_to_hang(q1):
-    """Two graded functions may hang (each stopped after three cases of the per-case limit, plus
+    """Two graded functions may hang (each stopped after three cases of the per-case limit's
+    wall-clock backstop, three times the limit since a sleeping case spends no CPU time, plus
     the supervisor's one-second grace each) and the notebook's budget still reaches the next
     function, so a hang costs only its own points (as under ``grade``); a notebook of one
     function gets room for one."""
     functions = function_names(q1)      # choice and number items run no student code
     assert 2 <= len(functions) < len(q1.graded)
     allowance = budget.hang_allowance([q1], case_timeout=10.0)
-    assert allowance == {q1.name: pytest.approx(2 * 3 * (10.0 + 1.0))}
+    assert allowance == {q1.name: pytest.approx(2 * 3 * (3 * 10.0 + 1.0))}
     got = budget.budgets({q1.name: 1.0}, Policy(margin=10, floor_seconds=20), allowance)
-    assert got[q1.name] == pytest.approx(20.0 + 2 * 33.0)
+    assert got[q1.name] == pytest.approx(20.0 + 2 * 93.0)
     one = replace(q1, graded=[g for g in q1.graded if g.name == functions[0]])
-    assert budget.hang_allowance([one], case_timeout=10.0) == {q1.name: pytest.approx(33.0)}
+    assert budget.hang_allowance([one], case_timeout=10.0) == {q1.name: pytest.approx(93.0)}
 
 
 def test_watch_once_from_the_command_line(tmp_path, q1, mode, capsys, monkeypatch):
