@@ -300,14 +300,20 @@ def _ambiguous_indices(rng):
     never the representative whose alternative the notebook's figure and explorer draw
     (``course_lib._mc_case_data.SHOWN_INDICES``: shipped, so it would answer the case). A class
     with one other member (case 13: 165 and 90) would give a fixed answer: it is left out."""
+    for orbit in _unshown_ambiguous_orbits():
+        if len(orbit) > 1:      # case 13's one other member is a visible case
+            yield int(rng.choice(orbit))
+
+
+@functools.cache
+def _unshown_ambiguous_orbits() -> tuple[tuple[int, ...], ...]:
+    """The members of each face-ambiguous class but the one the notebook shows (computed once:
+    each orbit takes the cube's 48 symmetries)."""
     from course_lib._mc_case_data import SHOWN_INDICES
 
-    for case in mc.BASE_CASES:
-        if case.ambiguous:
-            orbit = [i for i in mc.symmetry_orbit(case.index, complement=True).tolist()
-                     if i not in SHOWN_INDICES]
-            if len(orbit) > 1:      # case 13's one other member is a visible case
-                yield int(rng.choice(orbit))
+    return tuple(tuple(i for i in mc.symmetry_orbit(case.index, complement=True).tolist()
+                       if i not in SHOWN_INDICES)
+                 for case in mc.BASE_CASES if case.ambiguous)
 
 
 def _alternative_cases(rng):
