@@ -204,8 +204,8 @@ def call_in_process(func, case, index: int = 0) -> CaseOutcome:
 def summarise(records: list[CaseRecord], points: float,
               kind: CellKind = CellKind.FUNCTION) -> tuple[float, Status, str]:
     """``(score, status, message)`` of a test cell: ``points × passed / cases``, where a
-    function's bad-input cases count in proportion to the hidden ordinary cases it passes
-    (:func:`bad_input_withheld`); the status names the most serious failure
+    function's visible and bad-input cases count in proportion to the hidden ordinary cases it
+    passes (:func:`withheld_passes`); the status names the most serious failure
     (:data:`~autograder.model.SEVERITY`)."""
     n = len(records)
     if n == 0:
@@ -219,7 +219,7 @@ def summarise(records: list[CaseRecord], points: float,
         ref = next(r for r in records if r.verdict is Verdict.REFERENCE_USED)
         return 0.0, Status.REFERENCE_USED, (f"{clip(ref.reason, 160)}: a graded function must "
                                             "be your own work, so this test scores 0")
-    withheld = bad_input_withheld(records) if kind is CellKind.FUNCTION else 0.0
+    withheld = withheld_passes(records) if kind is CellKind.FUNCTION else 0.0
     score = round(points * (passed - withheld) / n, 6)
     if kind in (CellKind.CHOICE, CellKind.VALUE):
         return score, _status_of(counts) if counts else Status.OK, \
@@ -229,8 +229,8 @@ def summarise(records: list[CaseRecord], points: float,
     parts = [f"{c} {VERDICT_WORDS[v]}" for v, c in sorted(counts.items(), key=lambda x: -x[1])]
     msg = f"{passed} of {n} cases passed ({', '.join(parts)})"
     if withheld > 1e-9:
-        msg += ("; the bad-input cases it passed (raising ValueError) count only in proportion "
-                "to the hidden ordinary cases it answers right")
+        msg += ("; the visible and bad-input cases it passed count only in proportion to the "
+                "hidden ordinary cases it answers right")
     first = next((r for r in records if r.verdict is not Verdict.PASS and r.visible), None)
     if first is not None:
         msg += f"; e.g. {first.label or 'a visible case'}: {clip(first.reason, 200)}"
@@ -240,22 +240,31 @@ def summarise(records: list[CaseRecord], points: float,
     return score, _status_of(counts), msg
 
 
-def bad_input_withheld(records: list[CaseRecord]) -> float:
-    """How many of the passed cases of a graded function do not count: its bad-input cases
-    (those where raising is the right answer, ``record.raises``) count in proportion to the
-    share of its *hidden* ordinary cases it answers right (Q1-Q6: the "bad input raises
-    ``ValueError``" convention of every notebook). So raising ``ValueError`` on every input
-    earns nothing for them, nor does answering only the visible cases (whose values the
-    notebook and the page show) from a table and raising on the rest, as a red team did.
+def withheld_passes(records: list[CaseRecord]) -> float:
+    """How many of the passed cases of a graded function do not count (the course's one credit
+    rule, stated in each notebook's first cell).
 
-    Without hidden cases (a student's own ``check``) the visible ordinary cases stand in; a
-    function whose cases all must raise keeps them (the rule needs an ordinary case)."""
+    The cases a function can pass without the knowledge count only in proportion to the share
+    of its *hidden ordinary* cases it answers right: its visible cases (their inputs and
+    answers are in the notebook and on the page) and its bad-input cases (where raising
+    ``ValueError`` is the right answer, ``record.raises``). Every hidden ordinary case's answer
+    depends on the draw and the hidden cases run in a shuffled order (``grade.cases``), so a
+    function that raises on every input, answers the visible cases from a table, or counts its
+    calls and answers by position (issue 33, finding 1: 12.6 of 64 points) earns nothing for
+    them; a function right on every hidden ordinary case keeps them all.
+
+    Without hidden cases (a student's own ``check``, or a name whose only case is visible) the
+    visible ordinary cases stand in for the hidden ones and only the bad-input cases are
+    withheld; a function whose cases all must raise keeps them (the rule needs an ordinary
+    case).
+    """
     ordinary = [r for r in records if not r.raises]
     if not ordinary:
         return 0.0
-    hidden = [r for r in ordinary if not r.visible] or ordinary
-    share = sum(r.verdict is Verdict.PASS for r in hidden) / len(hidden)
-    return sum(r.verdict is Verdict.PASS for r in records if r.raises) * (1.0 - share)
+    hidden = [r for r in ordinary if not r.visible]
+    share = sum(r.verdict is Verdict.PASS for r in hidden or ordinary) / len(hidden or ordinary)
+    counted_in_proportion = [r for r in records if r.raises or (hidden and r.visible)]
+    return sum(r.verdict is Verdict.PASS for r in counted_in_proportion) * (1.0 - share)
 
 
 def _status_of(counts: dict[Verdict, int]) -> Status:

@@ -3,8 +3,12 @@
 A graded function is described once, by an :class:`Exercise`: its reference implementation in
 ``course_lib``, a generator of :class:`Case` objects (the visible cases that carry the exam's own
 numbers first, then hidden random and edge cases drawn from a seeded generator) and a comparison
-rule. The in-notebook hidden tests (:mod:`autograder.incell`) and the out-of-kernel grader both
-read the same objects, so a grading rule lives in one place.
+rule. Every hidden case that does not raise has an answer that depends on the draw (an edge case
+draws its numbers, a True/False case draws which it is, an empty result is drawn among non-empty
+ones): the grader shuffles the hidden cases, and a fixed answer could still be given by a function
+that recognises its case without the maths (issue 33, finding 1;
+``tests/grading/test_draw_dependence.py``). The in-notebook hidden tests (:mod:`autograder.incell`)
+and the out-of-kernel grader both read the same objects, so a grading rule lives in one place.
 
 Everything that crosses from student code to the grader is *plain data*: ``None``, ``bool``,
 ``int``, ``float``, ``str``, numeric NumPy arrays, and tuples/lists of those. :func:`to_plain`

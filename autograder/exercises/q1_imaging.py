@@ -41,8 +41,12 @@ def _displayed_thickness_cases(rng):
     yield Case(args=(rng.uniform(1.0, 50.0, 5), rng.uniform(1400.0, 1650.0, 5)),
                kwargs={"c_assumed": float(rng.uniform(1450.0, 1600.0))},
                label="a scanner assuming another speed")
-    yield Case(args=(0.0, 1578.0), label="zero thickness")
-    yield Case(args=(12.0, 4080.0), label="bone-like speed (displayed much too short)")
+    thickness = rng.uniform(0.1, 100.0, 4)
+    thickness[rng.integers(4)] = 0.0
+    yield Case(args=(thickness, rng.uniform(1400.0, 1650.0, 4)),
+               label="4 layers, one of zero thickness")
+    yield Case(args=(float(rng.uniform(5.0, 30.0)), float(rng.uniform(3500.0, 4100.0))),
+               label="bone-like speed (displayed much too short)")
     yield Case(args=(10.0, 0.0), label="zero speed", raises=ValueError)
     yield Case(args=(10.0, -1450.0), label="negative speed", raises=ValueError)
     yield Case(args=(10.0, 1450.0), kwargs={"c_assumed": 0.0}, label="zero assumed speed",
@@ -64,8 +68,11 @@ def _displayed_depths_cases(rng):
                    label=f"random stack of {n} layers")
     yield Case(args=(rng.uniform(0.5, 30.0, 4), rng.uniform(1400.0, 1650.0, 4)),
                kwargs={"c_assumed": 1480.0}, label="scanner assuming 1480 m/s")
-    yield Case(args=((5.0, 0.0, 5.0), (1482.0, 1578.0, 1482.0)), label="a zero-thickness layer")
-    yield Case(args=([10.0, 20.0, 30.0], [1540.0, 1540.0, 1540.0]),
+    outer = rng.uniform(0.5, 30.0, 2)
+    yield Case(args=((float(outer[0]), 0.0, float(outer[1])),
+                     tuple(float(c) for c in rng.uniform(1400.0, 1650.0, 3))),
+               label="a zero-thickness layer")
+    yield Case(args=([float(t) for t in rng.uniform(0.5, 30.0, 3)], [1540.0, 1540.0, 1540.0]),
                label="every layer at 1540 m/s (lists)")
     yield Case(args=((10.0, -5.0), (1500.0, 1500.0)), label="negative thickness",
                raises=ValueError)
@@ -92,7 +99,8 @@ def _round_trip_cases(rng):
                          rng.uniform(0.0, 5.0, n)), label=f"random stack of {n} layers")
     yield Case(args=(0.5, 2.0, rng.uniform(0.1, 3.0, 4)),
                label="one coefficient for every layer (scalar alpha)")
-    yield Case(args=((0.0, 0.0), 10.0, (3.0, 4.0)), label="lossless layers")
+    yield Case(args=((0.0, float(rng.uniform(0.1, 2.0)), 0.0), float(rng.uniform(1.0, 15.0)),
+                     rng.uniform(0.5, 5.0, 3)), label="a lossy layer between lossless ones")
     yield Case(args=((0.5, -0.1), 5.0, (1.0, 1.0)), label="negative attenuation",
                raises=ValueError)
     yield Case(args=(0.5, 0.0, 2.0), label="zero frequency", raises=ValueError)

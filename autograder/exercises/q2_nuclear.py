@@ -132,8 +132,11 @@ def _open_fraction_cases(rng):
                label="source at 30 cm: only the centre hole (cut-off 7.5 mm)", visible=True)
     yield Case(args=(exam_holes, 1.0, 40.0, 1e5, 50.0),
                label="very distant source: all 81 holes", visible=True)
-    yield Case(args=(np.array([[25.0, 0.0], [0.0, -25.0], [30.0, 0.0]]), 1.0, 40.0, 1000.0,
-                     50.0), label="holes exactly on the cut-off r L / z = d count as open")
+    # d a power of two, so that r L / z = 25 d * 40 / 1000 = d holds exactly in floating point
+    d = float(rng.choice([0.5, 1.0, 2.0]))
+    yield Case(args=(np.array([[25.0, 0.0], [0.0, -25.0], [30.0, 0.0]]) * d, d, 40.0, 1000.0,
+                     float(rng.uniform(40.0, 80.0)) * d),
+               label="holes exactly on the cut-off r L / z = d count as open")
     for _ in range(4):
         pitch = float(rng.uniform(2.0, 12.0))
         n = int(rng.integers(1, 7))

@@ -249,7 +249,11 @@ def _cube_index_cases(rng):
                visible=True)
     yield Case(args=(np.array([7.0, 13, 13, 7, 13, 7, 7, 13]), 10.0),
                label="corners 0, 3, 5, 6 below 10", visible=True)
-    yield Case(args=(np.full(8, 10.0), 10.0), label="all equal to iso: none below it")
+    values, iso = rng.uniform(0, 1, 8), float(rng.uniform(0.2, 0.8))
+    at_iso = rng.random(8) < 0.5
+    at_iso[rng.integers(8)] = True
+    values[at_iso] = iso
+    yield Case(args=(values, iso), label="some corners equal to iso: those are not below it")
     for _ in range(3):
         yield Case(args=(rng.uniform(0, 1, 8), float(rng.uniform(0.2, 0.8))), label="random cell")
     yield Case(args=(rng.uniform(0, 1, (5, 8)), 0.5), label="batch of 5 cells")
@@ -257,11 +261,20 @@ def _cube_index_cases(rng):
     yield Case(args=(np.zeros(7), 0.5), label="7 values", raises=ValueError)
 
 
+#: The groups of ``count_symmetry_classes`` other than the exam's (complement, reflections).
+_OTHER_GROUPS = ((False, False), (False, True), (True, True))
+
+
 def _symmetry_cases(rng):
     yield Case(args=(True, False), label="rotations and complement (exam Q3(b))", visible=True)
-    yield Case(args=(False, False), label="rotations only")
-    yield Case(args=(False, True), label="rotations and reflections")
-    yield Case(args=(True, True), label="rotations, reflections and complement")
+    # four inputs in all: each hidden case draws its group, so no call's answer is fixed
+    for _ in range(3):
+        yield Case(args=_OTHER_GROUPS[rng.integers(len(_OTHER_GROUPS))],
+                   label="rotations with or without reflections and complement")
+
+
+#: The cases with a rotation class of at most 6 members, the empty and the full cube left out.
+_SMALL_CLASS_MEMBERS = [i for i in range(1, 255) if len(mc.symmetry_orbit(i)) <= 6]
 
 
 def _orbit_cases(rng):
@@ -273,8 +286,10 @@ def _orbit_cases(rng):
         for _ in range(2):
             yield Case(args=(int(rng.integers(1, 255)), *flags),
                        label=f"random case, complement={flags[0]}, reflections={flags[1]}")
-    yield Case(args=(int(rng.choice([0, 255])), True, True), label="no corner or every corner")
-    yield Case(args=(165,), label="corners 0, 2, 5, 7 (Lorensen's case 13)")
+    yield Case(args=(int(rng.choice([0, 255])), *(bool(b) for b in rng.random(2) < 0.5)),
+               label="no corner or every corner")
+    yield Case(args=(int(rng.choice(_SMALL_CLASS_MEMBERS)), *(bool(b) for b in rng.random(2) < 0.5)),
+               label="a case of a class of at most 6 members (e.g. Lorensen's case 13)")
     yield Case(args=(256,), label="index 256", raises=ValueError)
     yield Case(args=(-1, True), label="index -1", raises=ValueError)
     yield Case(args=(2.5,), label="index 2.5", raises=ValueError)
@@ -283,20 +298,30 @@ def _orbit_cases(rng):
 def _ambiguous_indices(rng):
     """A random member of each of the six face-ambiguous classes (rotations and complement),
     never the representative whose alternative the notebook's figure and explorer draw
-    (``course_lib._mc_case_data.SHOWN_INDICES``: shipped, so it would answer the case)."""
+    (``course_lib._mc_case_data.SHOWN_INDICES``: shipped, so it would answer the case). A class
+    with one other member (case 13: 165 and 90) would give a fixed answer: it is left out."""
+    for orbit in _unshown_ambiguous_orbits():
+        if len(orbit) > 1:      # case 13's one other member is a visible case
+            yield int(rng.choice(orbit))
+
+
+@functools.cache
+def _unshown_ambiguous_orbits() -> tuple[tuple[int, ...], ...]:
+    """The members of each face-ambiguous class but the one the notebook shows (computed once:
+    each orbit takes the cube's 48 symmetries)."""
     from course_lib._mc_case_data import SHOWN_INDICES
 
-    for case in mc.BASE_CASES:
-        if case.ambiguous:
-            orbit = [i for i in mc.symmetry_orbit(case.index, complement=True).tolist()
-                     if i not in SHOWN_INDICES]
-            yield int(rng.choice(orbit))
+    return tuple(tuple(i for i in mc.symmetry_orbit(case.index, complement=True).tolist()
+                       if i not in SHOWN_INDICES)
+                 for case in mc.BASE_CASES if case.ambiguous)
 
 
 def _alternative_cases(rng):
     yield Case(args=(5,), label="corners 0 and 2 inside (Lorensen's case 3)", visible=True)
     yield Case(args=(250,), label="its complement: corners 1, 3, 4, 5, 6, 7 inside",
                visible=True)
+    yield Case(args=(90,), label="corners 1, 3, 4, 6 inside (Lorensen's case 13, the orientation "
+                                 "the figure does not show)", visible=True)
     for index in _ambiguous_indices(rng):
         yield Case(args=(index,), label=f"a case of class {mc.case_of(index)}, random orientation")
     yield Case(args=(int(rng.choice([1, 3, 15, 65])),),
@@ -319,9 +344,18 @@ def _marching_cases(rng):
     field = _smooth_field(rng, (6, 7, 5))
     yield Case(args=(field, _iso_between(rng, field), tuple(rng.uniform(0.3, 2.0, 3))),
                label="smooth field, anisotropic spacing")
-    torus = mc.torus_field((12, 12, 6), (5.6, 5.4, 2.6), 3.6)
-    yield Case(args=(torus, 1.7 ** 2), label="a torus (genus one)")
-    yield Case(args=(field, float(field.min()) - 1.0), label="iso below the data: empty mesh")
+    # R + r <= 5.1 and the centre within 0.2 of (5.6, 5.4, 2.6): the torus stays in the grid
+    torus = mc.torus_field((12, 12, 6), (5.6, 5.4, 2.6) + rng.uniform(-0.2, 0.2, 3),
+                           float(rng.uniform(3.3, 3.6)))
+    iso = float(rng.uniform(1.4, 1.5)) ** 2
+    while np.any(np.abs(torus - iso) < 1e-7):
+        iso += 1e-5
+    yield Case(args=(torus, iso), label="a torus (genus one)")
+    field = _smooth_field(rng, (6, 5, 6))
+    empty = rng.random() < 1 / 3
+    yield Case(args=(field, float(field.min()) - 1.0 if empty else _iso_between(rng, field)),
+               label="smooth field, iso-level drawn (a third of the time below the data: an "
+                     "empty mesh)")
     yield Case(args=(np.zeros((4, 4)), 0.5), label="2-D volume", raises=ValueError)
     yield Case(args=(field, 0.5, (1.0, 0.0, 1.0)), label="zero spacing", raises=ValueError)
 
@@ -365,14 +399,22 @@ def _closed_cases(rng):
     flipped[0] = flipped[0, ::-1]
     yield Case(args=(flipped,), label="one face flipped", visible=True)
     yield Case(args=(tet_f[1:],), label="one face missing", visible=True)
+    # each hidden case is its defect or a closed mesh like it, drawn: True or False at random
     perm = rng.permutation(8)
-    box_f = _closed_meshes(rng)[2][1]
-    yield Case(args=(perm[box_f],), label="box, vertices renumbered")
-    yield Case(args=(np.vstack([perm[box_f], perm[box_f[:1]]]),), label="a face repeated")
-    yield Case(args=(np.vstack([perm[box_f], perm[box_f][:, ::-1]]),),
-               label="box and its inside-out copy (each edge used four times)")
-    two = np.vstack([tet_f, tet_f + 4])
-    yield Case(args=(two[rng.permutation(8)],), label="two tetrahedra, faces shuffled")
+    box_f = perm[_closed_meshes(rng)[2][1]]
+    flipped = box_f.copy()
+    k = rng.integers(len(box_f))
+    flipped[k] = flipped[k, ::-1]
+    yield Case(args=(box_f if rng.random() < 0.5 else flipped,),
+               label="box, vertices renumbered, perhaps with one face flipped")
+    yield Case(args=(np.vstack([box_f, box_f[rng.integers(len(box_f)), None]])
+                     if rng.random() < 0.5 else box_f[rng.permutation(len(box_f))],),
+               label="box, faces shuffled, perhaps with a face repeated")
+    yield Case(args=(np.vstack([box_f, box_f[:, ::-1] if rng.random() < 0.5 else box_f + 8]),),
+               label="box and its inside-out copy (each edge used four times) or a second box")
+    two = np.vstack([tet_f, tet_f + 4])[rng.permutation(8)]
+    yield Case(args=(two if rng.random() < 0.5 else two[1:],),
+               label="two tetrahedra, faces shuffled, perhaps with one face missing")
     yield Case(args=(np.array([[0, 1]]),), label="faces of 2 vertices", raises=ValueError)
 
 

@@ -43,7 +43,7 @@ def _parameter_row_cases(rng):
         n = int(rng.integers(2, 12))
         yield Case(args=(rng.uniform(-0.5, 1.5, n),), kwargs={"order": k},
                    label=f"array of {n} values of t (some outside [0, 1]), order {k}")
-    yield Case(args=(np.array([0.25]),), kwargs={"order": 2}, label="array of one value")
+    yield Case(args=(rng.uniform(0, 1, 1),), kwargs={"order": 2}, label="array of one value")
     yield Case(args=(0.5,), kwargs={"order": 3}, label="order 3", raises=ValueError)
     yield Case(args=(0.5,), kwargs={"order": -1}, label="order -1", raises=ValueError)
 
@@ -64,9 +64,11 @@ def _end_rows_cases(rng):
                label="M = identity: the weights are the parameter rows themselves")
     yield Case(args=(_BEZIER,), visible=True,
                label="Bezier basis: ends on d, tangent 3(d - c), p'' = 6(b - 2c + d)")
-    yield Case(args=(_CR,), label="exam Q4(b): the Catmull-Rom basis")
-    yield Case(args=(_BS,), label="exam Q4(b): the B-spline basis")
-    yield Case(args=(_HERMITE,), label="the cubic Hermite basis (geometry p0, p1, m0, m1)")
+    # end_rows is linear in M: a random factor keeps each named basis's answer from being fixed
+    for M, name in ((_CR, "exam Q4(b): the Catmull-Rom basis"),
+                    (_BS, "exam Q4(b): the B-spline basis"),
+                    (_HERMITE, "the cubic Hermite basis (geometry p0, p1, m0, m1)")):
+        yield Case(args=(float(rng.uniform(0.5, 3.0)) * M,), label=f"{name}, times a random factor")
     for i in range(3):
         yield Case(args=(rng.normal(scale=3.0, size=(4, 4)),), label=f"random 4 x 4 matrix {i + 1}")
     yield Case(args=(rng.integers(-6, 7, size=(4, 4)).astype(float),),
@@ -157,7 +159,8 @@ def _sample_curve_cases(rng):
                        kwargs={"end_rule": rule},
                        label=f"{kind}, {m} random {dim}-D points, {n} per segment, "
                              f"end_rule={rule!r}")
-    yield Case(args=(P5, "catmull-rom", 3), label="end_rule left at its default")
+    yield Case(args=(rng.normal(scale=3.0, size=(5, 2)), "catmull-rom", 3),
+               label="end_rule left at its default")
     yield Case(args=(P5, "bezier", 4), label="unknown kind 'bezier'", raises=ValueError)
     yield Case(args=(P5[:3], "b-spline", 4), label="3 points and no end rule",
                raises=ValueError)

@@ -66,7 +66,8 @@ def _normalize_cases(rng):
     yield Case(args=(_random_vectors(rng, (n,), scale=(1e-3, 1e3)),),
                label=f"batch of {n} vectors of very different lengths")
     yield Case(args=(_random_vectors(rng, (2, 4)),), label="batch of shape (2, 4, 3)")
-    yield Case(args=(np.array([1e-8, 0.0, 0.0]),), label="a very short (but non-zero) vector")
+    yield Case(args=(_random_vectors(rng, scale=(5e-9, 2e-8)),),
+               label="a very short (but non-zero) vector")
     bad = _random_vectors(rng, (4,))
     bad[2] = 0.0
     yield Case(args=(bad,), label="batch with one zero-length vector", raises=ValueError)
@@ -79,8 +80,10 @@ def _reflect_cases(rng):
     yield Case(args=(np.array([1.0, 2.0, 2.0]) / 3.0, np.array([0.0, 0.0, 5.0])),
                label="unit L = (1, 2, 2)/3 about N = (0, 0, 5): N must be normalised",
                visible=True)
-    # hidden: the exam's vectors (Q5(b) asks for R.V by hand, so no visible check gives it away)
-    yield Case(args=(Lu, _N), label="exam Q5(b): unit L and N")
+    # hidden: the exam's vectors (Q5(b) asks for R.V by hand, so no visible check gives it
+    # away), at random lengths so that the answer is not fixed (R keeps the length of L)
+    yield Case(args=(Lu * rng.uniform(0.5, 3.0), _N * rng.uniform(0.5, 3.0)),
+               label="exam Q5(b): L and N along the exam's directions, at random lengths")
     for _ in range(3):
         L, N = _random_vectors(rng, scale=(1, 1)), _random_vectors(rng, scale=(1, 1))
         yield Case(args=(L, N), label="random unit L and N")

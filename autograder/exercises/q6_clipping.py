@@ -153,6 +153,18 @@ def _random_convex_screen(rng, n, centre, radius, z_range=(-0.3, 1.3)):
     return np.concatenate([xy, z], axis=1)
 
 
+def _box_corners(rng, n):
+    """``n`` corners of the view volume (``-w <= X, Y <= w``, ``0 <= Z <= w``) with random
+    ``w > 0``, each moved just outside it along one axis with probability 1/2."""
+    w = rng.uniform(0.5, 5.0, n)
+    corners = np.column_stack([rng.choice([-1.0, 1.0], n) * w, rng.choice([-1.0, 1.0], n) * w,
+                               rng.choice([0.0, 1.0], n) * w, w])
+    for i in np.flatnonzero(rng.random(n) < 0.5):
+        axis = int(rng.integers(3))
+        corners[i, axis] = corners[i, axis] * 1.001 if corners[i, axis] else -1e-3 * w[i]
+    return corners
+
+
 # ------------------------------------------------------------------------------------------------
 # cases
 
@@ -162,11 +174,13 @@ def _inside_cases(rng):
     yield Case(args=(EXAM_B,), label="exam Q6(b)(i): triangle B (two vertices on planes)",
                visible=True)
     yield Case(args=(EXAM_A[2],), label="one vertex, shape (4,)", visible=True)
-    yield Case(args=(np.array([4.0, 4.0, 4.0, 4.0]),), label="corner of the box (inclusive)")
-    yield Case(args=(np.array([-1.0, -1.0, 0.0, 1.0]),), label="opposite corner (inclusive)")
-    yield Case(args=(np.array([0.0, 0.0, 0.5, -1.0]),), label="w < 0: behind the eye")
-    yield Case(args=(np.array([0.0, 0.0, -0.5, -1.0]),),
-               label="w < 0 with z_s = 0.5 after the divide: still outside")
+    yield Case(args=(_box_corners(rng, 6),),
+               label="6 corners of the box (inclusive), some moved just outside")
+    inside = _random_homogeneous(rng, rng.uniform([-1, -1, 0], [1, 1, 1], size=(6, 3)))
+    behind = rng.random(6) < 0.5
+    inside[behind] *= -1.0
+    yield Case(args=(inside,), label="6 vertices inside the box, some negated (w < 0: behind "
+                                     "the eye, though the divide by w lands inside)")
     pts = _random_homogeneous(rng, rng.uniform(-1.6, 1.6, size=(40, 3)) + [0, 0, 0.5])
     yield Case(args=(pts,), label="batch of 40 random vertices")
     pts = rng.uniform(-2, 2, size=(2, 5, 4))
@@ -177,12 +191,15 @@ def _inside_cases(rng):
 def _to_screen_cases(rng):
     yield Case(args=(EXAM_A,), label="exam Q6(b)(ii): triangle A", visible=True)
     yield Case(args=(EXAM_B,), label="exam Q6(b)(ii): triangle B", visible=True)
-    yield Case(args=(EXAM_B[2],), label="one vertex, shape (4,)")
+    yield Case(args=(_random_homogeneous(rng, rng.uniform(-1, 1, 3)),),
+               label="one vertex, shape (4,)")
     yield Case(args=(_random_homogeneous(rng, rng.uniform(-1, 1, (25, 3))),),
                label="batch of 25 vertices")
     yield Case(args=(_random_homogeneous(rng, rng.uniform(-1, 1, (2, 3, 3))),),
                label="batch of shape (2, 3, 4)")
-    yield Case(args=(np.zeros((0, 4)),), label="empty polygon (0, 4)")
+    n = int(rng.integers(0, 4))
+    yield Case(args=(_random_homogeneous(rng, rng.uniform(-1, 1, (n, 3))),),
+               label="0 to 3 vertices (none: an empty polygon of shape (0, 4))")
     yield Case(args=(np.array([1.0, 2.0, 3.0, 0.0]),), label="w = 0", raises=ValueError)
     yield Case(args=(np.ones((4, 3)),), label="wrong shape (4, 3)", raises=ValueError)
 
@@ -198,17 +215,23 @@ def _clip_cases(rng):
                    label=f"random convex {n}-gon cut by several planes")
     screen = _random_convex_screen(rng, 5, (0.0, 0.0), (0.5, 0.5), z_range=(0.2, 0.8))
     yield Case(args=(_random_homogeneous(rng, screen),), label="polygon entirely inside")
-    screen = _random_convex_screen(rng, 4, (3.0, 0.0), (0.5, 0.5), z_range=(0.2, 0.8))
+    # an empty result a third of the time, so that no call's answer is fixed
+    beyond = rng.random() < 1 / 3
+    screen = _random_convex_screen(rng, 4, (3.0 if beyond else rng.uniform(0.8, 1.2), 0.0),
+                                   (0.5, 0.5), z_range=(0.2, 0.8))
     yield Case(args=(_random_homogeneous(rng, screen),),
-               label="polygon entirely right of the volume: empty (0, 4)")
-    screen = _random_convex_screen(rng, 4, (0.0, 0.0), (0.5, 0.5), z_range=(1.5, 2.0))
+               label="polygon entirely right of the volume (empty (0, 4)) or across x = 1")
+    beyond = rng.random() < 1 / 3
+    screen = _random_convex_screen(rng, 4, (0.0, 0.0), (0.5, 0.5),
+                                   z_range=(1.5, 2.0) if beyond else (0.7, 1.3))
     yield Case(args=(_random_homogeneous(rng, screen),),
-               label="polygon entirely beyond the far plane: empty (0, 4)")
+               label="polygon entirely beyond the far plane (empty (0, 4)) or across it")
     tri = np.array([[0.2, 0.1, 0.5, 1.0], [-0.3, 0.2, 0.4, 1.0], [0.1, -0.2, 0.3, -0.5]])
     tri[:, :3] += rng.uniform(-0.05, 0.05, (3, 3))
     yield Case(args=(tri,), label="a vertex with w < 0 (behind the eye)")
-    big = np.array([[-3.0, -3.0, 0.5, 1.0], [3.0, -3.0, 0.5, 1.0], [0.0, 4.0, 0.5, 1.0]])
-    yield Case(args=(big,), label="triangle larger than the screen")
+    big = np.array([[-3.0, -3.0], [3.0, -3.0], [0.0, 4.0]]) + rng.uniform(-0.2, 0.2, (3, 2))
+    big = np.column_stack([big, np.full(3, rng.uniform(0.1, 0.9))])
+    yield Case(args=(_random_homogeneous(rng, big),), label="triangle larger than the screen")
     yield Case(args=(np.ones((3, 3)),), label="wrong shape (3, 3)", raises=ValueError)
     yield Case(args=(np.ones((2, 4)),), label="only two vertices", raises=ValueError)
 
@@ -218,13 +241,16 @@ def _area_cases(rng):
                visible=True)
     yield Case(args=(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),),
                label="unit right triangle, anticlockwise", visible=True)
-    yield Case(args=(np.array([[0.0, 0.0, 0.3], [0.0, 1.0, 0.1], [1.0, 0.0, 0.9]]),),
-               label="clockwise triangle: negative area")
+    screen = _random_convex_screen(rng, 3, rng.uniform(-1, 1, 2), rng.uniform(0.2, 2, 2))
+    yield Case(args=(screen[::-1],), label="clockwise triangle: negative area")
     for n in (4, 7, 12):
         screen = _random_convex_screen(rng, n, rng.uniform(-1, 1, 2), rng.uniform(0.2, 2, 2))
         yield Case(args=(screen,), label=f"random convex {n}-gon")
         yield Case(args=(screen[::-1],), label=f"random convex {n}-gon, clockwise")
-    yield Case(args=(np.zeros((0, 3)),), label="empty polygon: area 0")
+    n = int(rng.choice([0, 3, 4, 5]))
+    screen = _random_convex_screen(rng, n, rng.uniform(-1, 1, 2), rng.uniform(0.2, 2, 2)) \
+        if n else np.zeros((0, 3))
+    yield Case(args=(screen,), label="0, 3, 4 or 5 vertices (none: area 0)")
     yield Case(args=(np.ones((4,)),), label="wrong shape (4,)", raises=ValueError)
 
 
@@ -241,14 +267,19 @@ def _span_cases(rng):
     tri = np.array([[0.0, 0.0], [4.0, 0.0], [0.0, 2.0]])
     yield Case(args=(tri, 1.0), label="right triangle, halfway up", visible=True)
     yield Case(args=(tri, 3.0), label="above the triangle: None", visible=True)
-    yield Case(args=(tri, 0.0), label="along the horizontal edge")
-    yield Case(args=(tri, 2.0), label="through the top vertex only")
+    flat = rng.uniform(-5, 5, (3, 2))
+    flat[1, 1] = flat[0, 1]
+    yield Case(args=(flat, float(flat[0, 1])), label="along a horizontal edge")
+    t = rng.uniform(-5, 5, (3, 2))
+    yield Case(args=(t, float(t[:, 1].max())), label="through the top vertex only")
     for k in range(6):
         t = rng.uniform(-5, 5, (3, 2))
         y = rng.uniform(t[:, 1].min(), t[:, 1].max())
         yield Case(args=(t, float(y)), label=f"random triangle {k}, inside its height")
     t = rng.uniform(-5, 5, (3, 2))
-    yield Case(args=(t, float(t[:, 1].min() - 1.0)), label="below a random triangle: None")
+    misses = rng.random() < 1 / 3      # None a third of the time, so that no answer is fixed
+    y = t[:, 1].min() - 1.0 if misses else rng.uniform(t[:, 1].min(), t[:, 1].max())
+    yield Case(args=(t, float(y)), label="below a random triangle (None), or across it")
     yield Case(args=(t, float(t[1, 1])), label="through a vertex")
     yield Case(args=(np.ones((4, 2)), 0.0), label="four vertices", raises=ValueError)
     yield Case(args=(np.ones((3, 3)), 0.0), label="wrong shape (3, 3)", raises=ValueError)

@@ -75,13 +75,12 @@ class DrawnCase:
 
 
 def draw(ex: Exercise, seed: int) -> list[DrawnCase]:
-    """The exercise's cases from ``seed`` with their expected answers, visible ones first (the
-    sandbox runs them in this order, so a function has seen no hidden input while its returned
-    values are still shown); a case whose reference fails (a registry problem) is skipped with
-    a warning."""
+    """The exercise's cases from ``seed`` with their expected answers, in the order the sandbox
+    runs them (:func:`running_order`); a case whose reference fails (a registry problem) is
+    skipped with a warning."""
     drawn = []
-    cases = ex.draw_cases(np.random.default_rng(seed))
-    for case in sorted(cases, key=lambda c: not c.visible):
+    rng = np.random.default_rng(seed)
+    for case in running_order(ex.draw_cases(rng), rng):
         expected = None
         if case.raises is None:
             try:
@@ -95,6 +94,22 @@ def draw(ex: Exercise, seed: int) -> list[DrawnCase]:
     for d in drawn:
         d.result_cap = cap
     return drawn
+
+
+def running_order(cases, rng: np.random.Generator) -> list[Case]:
+    """The visible cases in the generator's order, then the hidden ones (bad-input cases among
+    them) shuffled by ``rng``.
+
+    Visible first, so a function has seen no hidden input while its returned values are still
+    shown. Hidden shuffled per draw, so the k-th call is no particular kind of case: a function
+    that counts its calls and answers by position (the visible answers, ``ValueError`` where the
+    generator puts its bad inputs, the constants of fixed cases) earns nothing by it
+    (issue 33, finding 1).
+    """
+    cases = list(cases)
+    visible = [c for c in cases if c.visible]
+    hidden = [c for c in cases if not c.visible]
+    return visible + [hidden[i] for i in rng.permutation(len(hidden))]
 
 
 def name_cap(caps) -> int:

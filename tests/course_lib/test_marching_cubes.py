@@ -290,16 +290,20 @@ def test_students_case_data_are_the_references():
 
 
 def test_hidden_alternative_cases_are_never_a_shown_representative():
-    """``alternative_triangulation``'s hidden cases cover the six ambiguous classes in other
-    orientations than the ones the figures draw (those rows are shipped)."""
+    """``alternative_triangulation``'s cases cover the six ambiguous classes in other
+    orientations than the ones the figures draw (those rows are shipped): five hidden, drawn
+    among each class's members, and case 13, whose one other member would be a fixed hidden
+    answer, visible."""
     from autograder.exercises import REGISTRY
 
     ex = REGISTRY["alternative_triangulation"]
     for seed in range(40):
         cases = [c for c in ex.draw_cases(np.random.default_rng(seed)) if c.raises is None]
         hidden = [c.args[0] for c in cases if not c.visible]
+        visible = [c.args[0] for c in cases if c.visible]
         assert not set(hidden) & set(_mc_case_data.SHOWN_INDICES)
-        assert sorted(mc.case_of(i) for i in hidden) == [3, 6, 7, 10, 12, 13]
+        assert sorted(mc.case_of(i) for i in hidden) == [3, 6, 7, 10, 12]
+        assert [i for i in visible if mc.case_of(i) == 13 and i not in _mc_case_data.SHOWN_INDICES]
 
 
 # Bourke's published edgeTable, first sixteen entries

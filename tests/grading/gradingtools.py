@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from autograder.exercises import REGISTRY
-from autograder.grade.cases import case_seed, job_digest
+from autograder.grade.cases import case_seed, job_digest, running_order
 from autograder.grade.planning import to_python
 from autograder.grade.sources import load_source
 
@@ -175,26 +175,30 @@ def planned_cells(nb: dict) -> list[tuple[str, str]]:
 
 def cases_of(student: str, name: str, nb, secret: bytes = SECRET):
     """The cases the grader draws for ``student`` whose notebook is ``nb`` (a dict, or the path
-    of the submitted file) with the grader's documented seeding."""
+    of the submitted file) with the grader's documented seeding, in the order it runs them."""
     ex = REGISTRY[name]
     if ex.kind == "choice":
         return [None]
     if not isinstance(nb, dict):
         nb = json.loads(Path(nb).read_text(encoding="utf-8"))
-    seed = case_seed(secret, student, name, job_digest(planned_cells(nb)))
-    return ex.draw_cases(np.random.default_rng(seed))
+    rng = np.random.default_rng(case_seed(secret, student, name, job_digest(planned_cells(nb))))
+    return running_order(ex.draw_cases(rng), rng)
 
 
 def counted_cases(cases, passes) -> float:
     """How many of ``cases`` count when those flagged in ``passes`` pass, by the rule each
-    notebook's first cell states (not read from the grader): bad-input cases count in
-    proportion to the share of hidden ordinary cases passed (the visible ones when no
-    ordinary case is hidden)."""
+    notebook's first cell states (not read from the grader): visible and bad-input cases count
+    in proportion to the share of hidden ordinary cases passed (with no hidden ordinary case,
+    the visible ones give the share and only the bad-input cases are scaled)."""
     ordinary = [p for c, p in zip(cases, passes) if c.raises is None]
-    hidden = [p for c, p in zip(cases, passes) if c.raises is None and not c.visible] or ordinary
-    share = sum(hidden) / len(hidden) if hidden else 1.0
-    bad = sum(p for c, p in zip(cases, passes) if c.raises is not None)
-    return sum(ordinary) + bad * share
+    hidden = [p for c, p in zip(cases, passes) if c.raises is None and not c.visible]
+    share = sum(hidden or ordinary) / len(hidden or ordinary) if ordinary else 1.0
+    earned = sum(p for c, p in zip(cases, passes) if c.raises is None and not c.visible)
+    scaled = sum(p for c, p in zip(cases, passes) if c.raises is not None or c.visible)
+    if not hidden:
+        earned = sum(ordinary)
+        scaled = sum(p for c, p in zip(cases, passes) if c.raises is not None)
+    return earned + scaled * share
 
 
 def typed_version(nb: dict, student: str) -> dict:

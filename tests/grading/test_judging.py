@@ -249,26 +249,35 @@ def test_raising_on_every_input_scores_nothing():
     assert "in proportion" in message
 
 
-def test_bad_input_cases_count_in_proportion_to_the_hidden_ordinary_cases_passed():
+def test_visible_and_bad_input_cases_count_in_proportion_to_the_hidden_ordinary_cases_passed():
     # 3 ordinary cases (1 visible passed; hidden: 1 of 2 passed), 2 bad-input cases passed:
-    # the bad-input cases count half, so 1 + 1 + 2 x 1/2 = 3 of 5 cases
+    # the visible and bad-input cases count half, so 1 + (1 + 2) x 1/2 = 2.5 of 5 cases
     records = [_rec(0, Verdict.PASS), _rec(1, Verdict.PASS), _rec(2, Verdict.WRONG_VALUE),
                _rec(3, Verdict.PASS, "ValueError"), _rec(4, Verdict.PASS, "ValueError")]
     for r in records[1:]:
         r.visible = False
     score, status, message = summarise(records, 5.0)
-    assert score == pytest.approx(3.0, abs=1e-9)
-    assert "in proportion" in message
+    assert score == pytest.approx(2.5, abs=1e-9)
+    assert "visible and bad-input cases" in message and "in proportion" in message
 
 
-def test_visible_cases_from_a_table_unlock_no_bad_input_case():
+def test_visible_cases_from_a_table_earn_nothing():
     """A red team answered the visible cases (shown on the page) from a table and raised on
-    everything else: its bad-input cases earn nothing, only the visible cases count."""
+    everything else (issue 33: by position): with no hidden ordinary case right, neither the
+    visible nor the bad-input cases count."""
     records = [_rec(0, Verdict.PASS), _rec(1, Verdict.ERROR), _rec(2, Verdict.ERROR),
                _rec(3, Verdict.PASS, "ValueError"), _rec(4, Verdict.PASS, "ValueError")]
     for r in records[1:]:
         r.visible = False
-    assert summarise(records, 5.0)[0] == pytest.approx(1.0, abs=1e-9)
+    assert summarise(records, 5.0)[0] == 0.0
+
+
+def test_without_hidden_cases_the_visible_ones_count_and_set_the_share():
+    # a student's own check: 2 of 3 visible ordinary cases right, 1 bad-input case right:
+    # 2 + 1 x 2/3 of 4 cases
+    records = [_rec(0, Verdict.PASS), _rec(1, Verdict.PASS), _rec(2, Verdict.WRONG_VALUE),
+               _rec(3, Verdict.PASS, "ValueError")]
+    assert summarise(records, 4.0)[0] == pytest.approx(2 + 2 / 3, abs=1e-6)
 
 
 def test_all_hidden_ordinary_cases_passed_keep_every_bad_input_case():
