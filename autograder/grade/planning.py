@@ -16,12 +16,11 @@ from dataclasses import dataclass, field
 
 from ..isolation.allowlist import ALLOWED_COURSE_MODULES, ALLOWED_REFERENCE, ALLOWED_WHOLE_MODULES
 from ..model import AnswerHint, AnswerShape, CellKind, SourceNotebook, Status, Submission
+from .magics import PARSE_ERRORS, to_python
 
 #: Characters of code in one cell the grader reads (parses, sends to the sandbox): an answer
 #: needs far less, and parsing costs some 600 bytes of memory per character.
 MAX_CELL_CODE = 100_000
-#: What parsing or compiling a student's code may raise: all mean "it cannot be parsed".
-PARSE_ERRORS = (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError)
 
 
 def parse_code(code: str) -> ast.Module | None:
@@ -48,31 +47,6 @@ def compile_problem(code: str) -> str:
     except ValueError as exc:
         return f"ValueError: {exc}"
     return ""
-
-
-def to_python(source: str) -> tuple[str | None, str]:
-    """Plain Python for a notebook cell: IPython magics and shell lines turned into no-ops.
-
-    Returns ``(code, note)``; ``code`` is None when the whole cell is a non-Python cell magic
-    (``%%bash``, ``%%html``...), which the grader skips.
-    """
-    lines = source.splitlines()
-    note = ""
-    if lines and lines[0].lstrip().startswith("%%"):
-        magic = lines[0].lstrip()[2:].split()[0] if lines[0].strip() != "%%" else ""
-        if magic in ("time", "timeit", "capture", "prun", "python", "python3", "debug"):
-            lines = lines[1:]
-            note = f"cell magic %%{magic} ignored"
-        else:
-            return None, f"cell magic %%{magic}: cell skipped"
-    text = "\n".join(lines)
-    try:
-        from IPython.core.inputtransformer2 import TransformerManager
-
-        return TransformerManager().transform_cell(text), note
-    except Exception:  # noqa: BLE001 - fall back to dropping magic and shell lines
-        kept = [ln for ln in text.splitlines() if not ln.lstrip().startswith(("%", "!"))]
-        return "\n".join(kept) + "\n", note
 
 
 def _bindings(code: str, name: str) -> list[ast.stmt] | None:
