@@ -25,12 +25,13 @@ import re
 
 #: The cell magics whose body is Python: the body runs, the magic line is dropped.
 PYTHON_CELL_MAGICS = ("time", "timeit", "capture", "prun", "python", "python3", "debug")
-#: A line that may be IPython's: a magic or a shell escape (by its start), a help request.
-_SPECIAL = re.compile(r"^[ \t]*[%!?]|\?[ \t]*$", re.M)
+#: A line that may be IPython's: a magic or a shell escape (at its start, or assigned from), a
+#: help request.
+_SPECIAL = re.compile(r"^[ \t]*[%!?]|=[ \t]*[%!]|\?[ \t]*$", re.M)
 #: A help request: ``name?``, ``name??``, ``?name``, ``??name`` (dotted names, ``*`` wildcards).
 _HELP = re.compile(r"[ \t]*(\?\??[\w.*]+|[\w.*]+\?\??)[ \t]*")
-#: The target of an assignment from a magic (``x = !ls``, ``a, b = %sx ls``).
-_TARGET = re.compile(r"[\w.\[\]'\", \t]+")
+#: The target of an assignment from a magic (``x = !ls``, ``a, b = %sx ls``, ``x: list = !ls``).
+_TARGET = re.compile(r"[\w.:\[\]'\", \t]+")
 #: What parsing or compiling a student's code may raise: all mean "it cannot be parsed".
 PARSE_ERRORS = (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError)
 
