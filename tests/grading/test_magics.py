@@ -116,3 +116,24 @@ def test_plain_python_is_what_ipython_makes_of_it():
                     seen += 1
                     assert code == ipython
     assert seen > 500 and special > 0
+
+
+def test_a_notebook_stripped_of_its_metadata_is_parsed_once_per_cell(tmp_path, monkeypatch):
+    """With no grade_id left, every graded name is looked for by what the cells define: each
+    cell is parsed once, not once per graded name (ten 96 kB cells of plain Python cost the
+    grader 24 s of CPU that way, before any sandbox)."""
+    from autograder.grade import planning
+
+    src = next(s for s in course_sources() if s.name == "q1_imaging")
+    nb = release_version(src)
+    for cell in nb["cells"]:
+        cell["metadata"] = {}
+    (tmp_path / f"{src.name}.ipynb").write_text(json.dumps(nb), encoding="utf-8")
+    sub = read_submission(tmp_path, "kim", src.name)
+    parsed = []
+    real = planning.parse_code
+    monkeypatch.setattr(planning, "parse_code", lambda code: parsed.append(code) or real(code))
+    plan = plan_cells(src, sub)
+    assert plan.by_name, "names were found by definition"
+    code_cells = sum(c["cell_type"] == "code" for c in sub.cells)
+    assert len(parsed) <= code_cells < len(src.graded) * code_cells
