@@ -2,7 +2,8 @@
 
 :func:`grade_batch` takes every student and source notebook through five stages: **read** the
 submission (:mod:`.reading`), **plan** its cells (:mod:`.planning`; rows that need no sandbox,
-such as a missing notebook, are decided here), build one :class:`NotebookJob` whose cases are
+such as a missing notebook or any choice or number item, judged on its own cell's literal, are
+decided here), build one :class:`NotebookJob` whose cases are
 drawn per student (:mod:`.cases`), **run** the jobs on an executor (:mod:`.executors`:
 ``--jobs`` threads each waiting on a local sandbox, or the workers of a dask cluster,
 ``--scheduler``), **judge** each returned :class:`~autograder.model.NameRun` at once

@@ -11,7 +11,9 @@ shown to them in the item cells scores them, in the same batch.
 
 from __future__ import annotations
 
+import ast
 import os
+import re
 
 import numpy as np
 import pytest
@@ -20,6 +22,7 @@ from gradingtools import (course_sources, read_grades, release_version, run_grad
                           write_nb)
 
 from autograder.exercises import REGISTRY
+from autograder.grade.planning import NOT_TYPED, typed_answer
 from autograder.model import CellKind
 from course_lib import variants
 
@@ -145,3 +148,28 @@ def test_items_never_reach_the_sandbox(tmp_path):
     assert read.work is not None and {t.test_id for t in read.work.names}.isdisjoint(items)
     assert {t.test_id for t in read.work.names} == {t for _, t, _ in
                                                     _items(src, CellKind.FUNCTION)}
+
+
+def _tupled(value):
+    return tuple(_tupled(v) for v in value) if isinstance(value, list) else value
+
+
+def test_every_form_the_notebooks_show_is_read_as_typed():
+    """The forms each item's prompt tells students to type (``q2c_your_length = 123.4``,
+    ``q6bi_your_inside = [True, False, True]``, a choice's ``"a, b"``), typed in the item's
+    cell, are read as those literals; the forms come from the notebooks' own text."""
+    items = {name for src in course_sources() for kind in (CellKind.CHOICE, CellKind.VALUE)
+             for name, _, _ in _items(src, kind)}
+    shown = set()
+    for src in course_sources():
+        for cell in src.nb["cells"]:
+            text = "".join(cell["source"]) if cell["cell_type"] == "markdown" else ""
+            forms = re.findall(r"`(\w+) = ([^`]+)`", text)
+            forms += re.findall(r"Set `(\w+)` to[^`]*`(\"[^`]*\")`", text)
+            for name, example in forms:
+                if name in items:
+                    typed = typed_answer(f"# my answer\n{name} = {example}\n", name)
+                    assert typed is not NOT_TYPED and typed == _tupled(ast.literal_eval(example))
+                    shown.add(name)
+    value_items = {n for n in items if REGISTRY[n].kind is CellKind.VALUE}
+    assert value_items <= shown and len(shown - value_items) >= 10
