@@ -163,11 +163,13 @@ def _prepare(student: str, src: SourceNotebook, sub: Submission,
     plan = plan_cells(src, sub)
     sub.found_by_name = dict(plan.by_name)
     variant = opts.graded_as.get(student, "")
+    others = tuple(other_students(sub))     # once per notebook: the scan is bounded per call
     rows, names = [], []
     for test in src.graded:
         row = _decided_without_sandbox(student, src, sub, plan, test)
         if row is None and REGISTRY[test.name].kind.is_item:
-            row = judge_typed_item(student, src, sub, plan, test, variant, opts.reveal_hidden)
+            row = judge_typed_item(student, src, sub, plan, test, variant, others,
+                                   opts.reveal_hidden)
         if row is None:
             names.append(test)
         else:
@@ -177,13 +179,15 @@ def _prepare(student: str, src: SourceNotebook, sub: Submission,
 
 
 def judge_typed_item(student: str, src: SourceNotebook, sub: Submission, plan: CellPlan,
-                     test: GradedTest, variant: str, reveal: bool) -> CellResult:
+                     test: GradedTest, variant: str, others: tuple[str, ...],
+                     reveal: bool) -> CellResult:
     """The row of a choice or number item, judged on the literal its own cell types and on
     nothing the student's code computes or sets anywhere (so no sandbox runs for it).
 
     A variable set by a later cell would let one notebook compute every reader's own letters
     from the key and the public option-order code (issue 33); an item cell left as released,
-    emptied or set to None is unanswered whatever runs after it."""
+    emptied or set to None is unanswered whatever runs after it. ``others``: the ids the
+    notebook names besides its folder's (:func:`.whose.other_students`)."""
     ex = REGISTRY[test.name]
     code = plan.python.get(plan.chosen[test.name], "")
     typed = typed_answer(code, test.name)
@@ -193,7 +197,7 @@ def judge_typed_item(student: str, src: SourceNotebook, sub: Submission, plan: C
     verdict = judging.judge_cell(judging.CellEvidence(
         ex, test.points, records, answer_hint(code, test.name, ex.kind),
         typed=answer is not None, answer=answer, notes=_notes(plan, variant, test.name),
-        others=tuple(other_students(sub)), student=student, reveal=reveal))
+        others=others, student=student, reveal=reveal))
     return graded_row(student, src.name, test, verdict.status, verdict.message,
                       score=verdict.score, cases=[keeping.kept(r, reveal) for r in records],
                       notes=list(verdict.notes), code=sub.cells[plan.chosen[test.name]]["source"],
