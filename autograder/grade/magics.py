@@ -51,10 +51,15 @@ def to_python(source: str) -> tuple[str | None, str]:
             return None, f"cell magic %%{magic}: cell skipped"
         lines = lines[1:]
         note = f"cell magic %%{magic} ignored"
-    text = "\n".join(lines) + "\n"
+    text = _ended("\n".join(lines))
     if not _SPECIAL.search(text) or _parses(text):
         return text, note
-    return "\n".join(_rewritten(lines)) + "\n", note
+    return _ended("\n".join(_rewritten(lines))), note
+
+
+def _ended(text: str) -> str:
+    """``text`` ending with one newline at least (as IPython's transformer ends a cell)."""
+    return text if text.endswith("\n") else text + "\n"
 
 
 def _parses(text: str) -> bool:

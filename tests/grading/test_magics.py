@@ -107,7 +107,8 @@ def test_plain_python_is_what_ipython_makes_of_it():
                 if cell["cell_type"] != "code" or text.lstrip().startswith("%%"):
                     continue
                 code, _ = to_python(text)
-                ipython = TransformerManager().transform_cell(text)
+                # what the grader ran before: IPython's transformer on the cell's lines
+                ipython = TransformerManager().transform_cell("\n".join(text.splitlines()))
                 if "get_ipython()" in ipython:
                     special += 1
                     ast.parse(code)
