@@ -135,8 +135,12 @@ def judge_value(ex: Exercise, outcome: CaseOutcome, student: str) -> tuple[Verdi
     return _judge_returned(ex, _NO_CASE, ex.value_for(student), outcome.value)
 
 
-def judge_item(ex: Exercise, outcome: CaseOutcome, student: str | None) -> tuple[Verdict, str]:
-    """A choice or a value item, judged for ``student``."""
+def judge_item(ex: Exercise, outcome: CaseOutcome | None,
+               student: str | None) -> tuple[Verdict, str]:
+    """A choice or a value item, judged for ``student``; ``outcome`` None when its cell types
+    no answer (``grade`` judges only the literal typed in the item's own cell)."""
+    if outcome is None:
+        return Verdict.UNANSWERED, not_typed(ex.name, ex.kind)
     if ex.kind is CellKind.VALUE:
         return judge_value(ex, outcome, student)
     return judge_choice(ex, outcome, student)

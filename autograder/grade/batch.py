@@ -2,7 +2,8 @@
 
 :func:`grade_batch` takes every student and source notebook through five stages: **read** the
 submission (:mod:`.reading`), **plan** its cells (:mod:`.planning`; rows that need no sandbox,
-such as a missing notebook, are decided here), build one :class:`NotebookJob` whose cases are
+such as a missing notebook or any choice or number item, judged on its own cell's literal, are
+decided here), build one :class:`NotebookJob` whose cases are
 drawn per student (:mod:`.cases`), **run** the jobs on an executor (:mod:`.executors`:
 ``--jobs`` threads each waiting on a local sandbox, or the workers of a dask cluster,
 ``--scheduler``), **judge** each returned :class:`~autograder.model.NameRun` at once
@@ -17,7 +18,7 @@ from __future__ import annotations
 import functools
 import sys
 import traceback
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from .. import judging
@@ -133,9 +134,7 @@ def _read_and_prepare(submitted: Path, student: str, src: SourceNotebook,
     try:
         sub = read_submission(submitted / student / ASSIGNMENT, student, src.name,
                               opts.max_notebook_mb)
-        rows, work = _prepare(student, src, sub)
-        if work is not None:
-            work.variant = opts.graded_as.get(student, "")
+        rows, work = _prepare(student, src, sub, opts)
         return ReadNotebook(sub, rows, work)
     except Exception as exc:  # noqa: BLE001 - one broken notebook never stops the batch
         traceback.print_exc()
@@ -149,9 +148,10 @@ def _grader_failed(exc: BaseException) -> str:
             "into it")
 
 
-def _prepare(student: str, src: SourceNotebook,
-             sub: Submission) -> tuple[list[CellResult], NotebookWork | None]:
-    """The rows that need no sandbox, and the rest as a :class:`NotebookWork` (or None)."""
+def _prepare(student: str, src: SourceNotebook, sub: Submission,
+             opts: Options) -> tuple[list[CellResult], NotebookWork | None]:
+    """The rows that need no sandbox (every item's among them), and the rest as a
+    :class:`NotebookWork` (or None)."""
     if sub.status is not Status.OK:
         rows = [graded_row(student, src.name, test, sub.status, sub.message, whole_notebook=True)
                 for test in src.graded]
@@ -162,15 +162,46 @@ def _prepare(student: str, src: SourceNotebook,
         return rows, None
     plan = plan_cells(src, sub)
     sub.found_by_name = dict(plan.by_name)
+    variant = opts.graded_as.get(student, "")
+    others = tuple(other_students(sub))     # once per notebook: the scan is bounded per call
     rows, names = [], []
     for test in src.graded:
         row = _decided_without_sandbox(student, src, sub, plan, test)
+        if row is None and REGISTRY[test.name].kind.is_item:
+            row = judge_typed_item(student, src, sub, plan, test, variant, others,
+                                   opts.reveal_hidden)
         if row is None:
             names.append(test)
         else:
             rows.append(row)
     rows.extend(_manual_rows(student, src, sub))
-    return rows, (NotebookWork(student, src, sub, plan, names) if names else None)
+    return rows, (NotebookWork(student, src, sub, plan, names, variant) if names else None)
+
+
+def judge_typed_item(student: str, src: SourceNotebook, sub: Submission, plan: CellPlan,
+                     test: GradedTest, variant: str, others: tuple[str, ...],
+                     reveal: bool) -> CellResult:
+    """The row of a choice or number item, judged on the literal its own cell types and on
+    nothing the student's code computes or sets anywhere (so no sandbox runs for it).
+
+    A variable set by a later cell would let one notebook compute every reader's own letters
+    from the key and the public option-order code (issue 33); an item cell left as released,
+    emptied or set to None is unanswered whatever runs after it. ``others``: the ids the
+    notebook names besides its folder's (:func:`.whose.other_students`)."""
+    ex = REGISTRY[test.name]
+    code = plan.python.get(plan.chosen[test.name], "")
+    typed = typed_answer(code, test.name)
+    answer = None if typed is NOT_TYPED else CaseOutcome(0, OutcomeKind.RETURNED, value=typed)
+    records = [CaseRecord(0, "your answer", True,
+                          *judging.judge_item(ex, answer, variant or student))]
+    verdict = judging.judge_cell(judging.CellEvidence(
+        ex, test.points, records, answer_hint(code, test.name, ex.kind),
+        typed=answer is not None, answer=answer, notes=_notes(plan, variant, test.name),
+        others=others, student=student, reveal=reveal))
+    return graded_row(student, src.name, test, verdict.status, verdict.message,
+                      score=verdict.score, cases=[keeping.kept(r, reveal) for r in records],
+                      notes=list(verdict.notes), code=sub.cells[plan.chosen[test.name]]["source"],
+                      fits_other=verdict.fits_other, answer=None if answer is None else typed)
 
 
 def _decided_without_sandbox(student: str, src: SourceNotebook, sub: Submission,
@@ -290,15 +321,10 @@ def _failed_notebook(work: NotebookWork, exc: BaseException) -> list[CellResult]
 def _prepare_name(work: NotebookWork, name: str, opts: Options) -> PreparedName:
     ex = REGISTRY[name]
     code = work.plan.python.get(work.plan.chosen[name], "")
-    if ex.kind is not CellKind.FUNCTION:
-        drawn = []
-        inputs = [CaseInput((), {}, 2**16)]
-    else:
-        digest = job_digest(work.plan.cells)
-        seed = case_seed(opts.secret, work.student, name, digest)
-        drawn = draw(ex, seed)
-        inputs = [CaseInput(tuple(d.case.args), dict(d.case.kwargs), d.result_cap)
-                  for d in drawn]
+    digest = job_digest(work.plan.cells)
+    seed = case_seed(opts.secret, work.student, name, digest)
+    drawn = draw(ex, seed)
+    inputs = [CaseInput(tuple(d.case.args), dict(d.case.kwargs), d.result_cap) for d in drawn]
     calls = [(tuple(d.case.args), dict(d.case.kwargs)) for d in drawn[:50]]
     hint = answer_hint(code, name, ex.kind, calls)
     return PreparedName(NameJob(name, wire_kind(ex.kind), list(work.plan.cells), inputs),
@@ -319,41 +345,32 @@ def judge_name(work: NotebookWork, test: GradedTest, prepared: PreparedName,
     if run is None:
         return row(Status.GRADER_ERROR, "the sandbox returned nothing for this test; the "
                    "instructor will look into it", code=code)
-    typed = NOT_TYPED
-    if ex.kind.is_item:
-        typed = typed_answer(work.plan.python.get(work.plan.chosen[test.name], ""), test.name)
-        if typed is not NOT_TYPED:      # judged on what the cell types, not on what ran
-            run = replace(run, outcomes=[CaseOutcome(0, OutcomeKind.RETURNED, value=typed)])
-    records = _records(ex, prepared.drawn, run, show_output, work.variant_id)
+    records = _records(ex, prepared.drawn, run, show_output)
     load_notes = keeping.load_notes(run, show_output)
     verdict = judging.judge_cell(judging.CellEvidence(
         ex, test.points, records, prepared.hint, defined=run.defined, load_notes=load_notes,
-        typed=typed is not NOT_TYPED, answer=run.outcomes[0] if ex.kind.is_item else None,
-        notes=_notes(work, test.name), others=others, student=work.student, reveal=reveal))
+        notes=_notes(work.plan, work.variant, test.name), others=others, student=work.student,
+        reveal=reveal))
     printed = (keeping.printed(run, records, reveal) if show_output
                else keeping.hidden_printed(run, records))
     return row(verdict.status, verdict.message, score=verdict.score,
                cases=[keeping.kept(r, reveal) for r in records], printed=printed,
                notes=list(verdict.notes) + load_notes, seconds=run.seconds, code=code,
-               fits_other=verdict.fits_other, answer=None if typed is NOT_TYPED else typed)
+               fits_other=verdict.fits_other)
 
 
-def _notes(work: NotebookWork, name: str) -> list[str]:
+def _notes(plan: CellPlan, variant: str, name: str) -> list[str]:
     """What planning found about the graded cell of ``name``, and whose numbers an item uses."""
-    notes = list(work.plan.notes.get(name, []))
-    if work.variant and REGISTRY[name].kind.is_item:
-        notes.append(f"judged on the numbers and option letters of {work.variant}, the id this "
+    notes = list(plan.notes.get(name, []))
+    if variant and REGISTRY[name].kind.is_item:
+        notes.append(f"judged on the numbers and option letters of {variant}, the id this "
                      "notebook was worked for (the instructor's decision)")
     return notes
 
 
-def _records(ex, drawn: list[DrawnCase], run: NameRun, show: bool = True,
-             student: str | None = None) -> list[CaseRecord]:
-    """The judged cases of one graded name (an item's one "case" is its answer, judged for
-    ``student``); before the deadline a hidden case's reference use is not described."""
-    if ex.kind.is_item:
-        verdict, reason = judging.judge_item(ex, run.outcomes[0], student)
-        return [CaseRecord(0, "your answer", True, verdict, reason)]
+def _records(ex, drawn: list[DrawnCase], run: NameRun, show: bool = True) -> list[CaseRecord]:
+    """The judged cases of one graded function; before the deadline a hidden case's reference
+    use is not described."""
     records = []
     for i, (d, outcome) in enumerate(zip(drawn, run.outcomes, strict=True)):
         verdict, reason = judging.judge_case(ex, d.case, d.expected, outcome)

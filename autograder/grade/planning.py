@@ -16,12 +16,11 @@ from dataclasses import dataclass, field
 
 from ..isolation.allowlist import ALLOWED_COURSE_MODULES, ALLOWED_REFERENCE, ALLOWED_WHOLE_MODULES
 from ..model import AnswerHint, AnswerShape, CellKind, SourceNotebook, Status, Submission
+from .magics import PARSE_ERRORS, to_python
 
 #: Characters of code in one cell the grader reads (parses, sends to the sandbox): an answer
 #: needs far less, and parsing costs some 600 bytes of memory per character.
 MAX_CELL_CODE = 100_000
-#: What parsing or compiling a student's code may raise: all mean "it cannot be parsed".
-PARSE_ERRORS = (SyntaxError, ValueError, RecursionError, MemoryError, OverflowError)
 
 
 def parse_code(code: str) -> ast.Module | None:
@@ -48,31 +47,6 @@ def compile_problem(code: str) -> str:
     except ValueError as exc:
         return f"ValueError: {exc}"
     return ""
-
-
-def to_python(source: str) -> tuple[str | None, str]:
-    """Plain Python for a notebook cell: IPython magics and shell lines turned into no-ops.
-
-    Returns ``(code, note)``; ``code`` is None when the whole cell is a non-Python cell magic
-    (``%%bash``, ``%%html``...), which the grader skips.
-    """
-    lines = source.splitlines()
-    note = ""
-    if lines and lines[0].lstrip().startswith("%%"):
-        magic = lines[0].lstrip()[2:].split()[0] if lines[0].strip() != "%%" else ""
-        if magic in ("time", "timeit", "capture", "prun", "python", "python3", "debug"):
-            lines = lines[1:]
-            note = f"cell magic %%{magic} ignored"
-        else:
-            return None, f"cell magic %%{magic}: cell skipped"
-    text = "\n".join(lines)
-    try:
-        from IPython.core.inputtransformer2 import TransformerManager
-
-        return TransformerManager().transform_cell(text), note
-    except Exception:  # noqa: BLE001 - fall back to dropping magic and shell lines
-        kept = [ln for ln in text.splitlines() if not ln.lstrip().startswith(("%", "!"))]
-        return "\n".join(kept) + "\n", note
 
 
 def _bindings(code: str, name: str) -> list[ast.stmt] | None:
@@ -124,12 +98,32 @@ def _plain_literal(value, depth: int = 0):
     return NOT_TYPED
 
 
+def top_level_names(code: str) -> frozenset[str] | None:
+    """The names ``code`` binds at top level (``def name``, ``name = ...``, as
+    :func:`_bindings` reads them); None when it does not parse."""
+    tree = parse_code(code)
+    if tree is None:
+        return None
+    names = set()
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            names.add(node.name)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            names.update(t.id for t in targets if isinstance(t, ast.Name))
+    return frozenset(names)
+
+
 def defines(code: str, name: str) -> bool:
     """Whether ``code`` defines ``name`` at top level (``def name`` or ``name = ...``)."""
-    found = _bindings(code, name)
-    if found is None:
+    return _defines(code, name, top_level_names(code))
+
+
+def _defines(code: str, name: str, names: frozenset[str] | None) -> bool:
+    """:func:`defines`, given ``code``'s :func:`top_level_names` (None: by its text)."""
+    if names is None:
         return bool(re.search(rf"^(def\s+{re.escape(name)}\b|{re.escape(name)}\s*=)", code, re.M))
-    return bool(found)
+    return name in names
 
 
 @dataclass
@@ -164,11 +158,12 @@ def plan_cells(src: SourceNotebook, sub: Submission) -> CellPlan:
               for code in [to_python(c["source"])[0]] if code is not None}
     run = {k: gid for gid, ks in by_id.items() for k in ks}
     plan = CellPlan([], set(), notes, {}, python=python)
+    bound: dict[int, frozenset[str] | None] = {}     # each cell parsed once, whatever is missing
     for name in names:
         if by_id.get(name):
             plan.chosen[name] = by_id[name][-1]
             continue
-        k = _cell_defining(sub, python, run, name)
+        k = _cell_defining(sub, python, run, name, bound)
         if k is None:
             plan.missing.add(name)
             continue
@@ -208,10 +203,19 @@ def _size_text(chars: int) -> str:
     return f"{chars / 1e6:.1f} MB" if chars >= 1e6 else f"{chars / 1e3:.0f} kB"
 
 
-def _cell_defining(sub: Submission, python: dict[int, str], taken: dict, name: str) -> int | None:
-    candidates = [k for k, c in enumerate(sub.cells)
-                  if k in python and k not in taken
-                  and not (c["grade_id"] or "").startswith("test_") and defines(python[k], name)]
+def _cell_defining(sub: Submission, python: dict[int, str], taken: dict, name: str,
+                   bound: dict[int, frozenset[str] | None]) -> int | None:
+    """The last untaken cell (no test cell) that defines ``name``; ``bound`` caches each
+    cell's :func:`top_level_names`, so a notebook stripped of its metadata is parsed once, not
+    once per graded name (ten 96 kB cells cost 21 s of the grader's CPU that way)."""
+    candidates = []
+    for k, c in enumerate(sub.cells):
+        if k not in python or k in taken or (c["grade_id"] or "").startswith("test_"):
+            continue
+        if k not in bound:
+            bound[k] = top_level_names(python[k])
+        if _defines(python[k], name, bound[k]):
+            candidates.append(k)
     return candidates[-1] if candidates else None
 
 
