@@ -141,7 +141,6 @@ print(json.dumps({"points": points,
 '''.replace("NAME", NAME)
 
 
-@pytest.mark.slow
 def test_add_fill_in_and_grade_an_honest_answer(scratch):
     done = _run(scratch, "new-exercise", "q5_phong", NAME, "--part", "c", "--points", "0.5",
                 "--args", "n")
