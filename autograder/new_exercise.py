@@ -88,6 +88,10 @@ def plan_from(notebook: str, name: str, part: str, points: float, args: str = "x
     if not name.isidentifier() or keyword.iskeyword(name) or name != name.lower() \
             or name.startswith("_"):
         raise ValueError(f"{name!r} is not a lower-case Python name a student can define")
+    try:
+        points = float(points)
+    except (TypeError, ValueError):
+        raise ValueError(f"--points {points!r}: a number of marks, e.g. 1 or 0.5") from None
     if not (points > 0 and (2 * points).is_integer()):
         raise ValueError(f"--points {points:g}: a positive number of half marks")
     arg_names = tuple(a.strip() for a in args.split(",") if a.strip())

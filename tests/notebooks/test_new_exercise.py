@@ -165,28 +165,41 @@ def test_add_fill_in_and_grade_an_honest_answer(scratch):
         assert ok and got == pytest.approx(0.5, abs=1e-12) and n_cases == 8
 
 
-@pytest.mark.parametrize("name, why", [
-    ("phong", "registered in autograder/exercises/q5_phong.py"),
-    ("q5c_answer", "a cell of q5_phong.ipynb has grade_id 'q5c_answer'"),
-    ("normalize", "registered"),
-    ("Phong", "not a lower-case Python name"),
-])
-def test_an_existing_or_bad_name_is_refused_and_nothing_written(scratch, name, why):
+def test_an_existing_name_is_refused_with_exit_status_2_and_nothing_written(scratch):
     before = _digest(scratch)
-    done = _run(scratch, "new-exercise", "q5_phong", name, "--part", "c", "--points", "1")
-    assert done.returncode == 2 and why in done.stderr, done.stderr
+    done = _run(scratch, "new-exercise", "q5_phong", "phong", "--part", "c", "--points", "1")
+    assert done.returncode == 2, done.stderr
+    assert "'phong' exists: registered in autograder/exercises/q5_phong.py" in done.stderr
     assert _digest(scratch) == before
 
 
 @pytest.mark.parametrize("args, why", [
-    (["q9_none", "f", "--part", "a", "--points", "1"], "no notebook 'q9_none'"),
-    (["q5_phong", "f", "--part", "z", "--points", "1"], "has no part (z)"),
-    (["q5_phong", "f", "--part", "c", "--points", "0.3"], "half marks"),
-    (["q5_phong", "f", "--part", "c", "--points", "1", "--after", "nowhere"], "--after 'nowhere'"),
+    (("q5_phong", "normalize", "c", 1), "'normalize' exists: registered"),
+    (("q5_phong", "q5c_answer", "c", 1), "a cell of q5_phong.ipynb has grade_id 'q5c_answer'"),
+    (("q5_phong", "Phong", "c", 1), "not a lower-case Python name"),
+    (("q9_none", "f", "a", 1), "no notebook 'q9_none'"),
+    (("q5_phong", "f", "c", 0.3), "half marks"),
+    (("q5_phong", "f", "c)(", 1), "give a part of the exam"),
 ])
-def test_a_bad_request_is_a_clear_error(scratch, args, why):
-    done = _run(scratch, "new-exercise", *args)
-    assert done.returncode == 2 and why in done.stderr, done.stderr
+def test_a_bad_request_is_a_clear_value_error(args, why):
+    from autograder.new_exercise import plan_from
+
+    with pytest.raises(ValueError, match=re.escape(why)):
+        plan_from(*args)
+
+
+@pytest.mark.parametrize("part, after, why", [("z", None, "has no part (z)"),
+                                              ("c", "nowhere", "--after 'nowhere'")])
+def test_a_place_that_is_not_there_is_refused_before_anything_is_written(scratch, monkeypatch,
+                                                                          part, after, why):
+    from autograder import new_exercise
+
+    monkeypatch.setattr(new_exercise, "REPO_ROOT", scratch)
+    before = _digest(scratch)
+    plan = new_exercise.plan_from("q5_phong", "f", part, 1, after=after)
+    with pytest.raises(ValueError, match=re.escape(why)):
+        new_exercise.create(plan)
+    assert _digest(scratch) == before
 
 
 def test_the_new_cells_have_nbgrader_metadata_as_the_notebooks_do():
