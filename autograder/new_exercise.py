@@ -206,7 +206,13 @@ def add_cells(plan: Plan) -> Path:
     path = REPO_ROOT / "notebooks" / f"{plan.notebook}.ipynb"
     nb = json.loads(path.read_text(encoding="utf-8"))
     at = _insert_at(nb["cells"], plan, marks.notebook_marks(path))
-    nb["cells"][at + 1:at + 1] = notebook_cells(plan)
+    new = notebook_cells(plan)
+    taken = {cell.get("id") for cell in nb["cells"]}
+    for cell in new:        # nbformat 4.5 wants cell ids unique within the notebook
+        while cell["id"] in taken:
+            cell["id"] = secrets.token_hex(4)
+        taken.add(cell["id"])
+    nb["cells"][at + 1:at + 1] = new
     path.write_text(json.dumps(nb, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
     return path
 
