@@ -151,6 +151,9 @@ def test_add_fill_in_and_grade_an_honest_answer(scratch):
                     "course_lib/shading.py", "tests/grading/honest/q5_phong.py",
                     f"tests/course_lib/test_{NAME}.py"):
         assert f"wrote {written}" in done.stdout
+    import nbformat
+
+    nbformat.validate(nbformat.read(str(scratch / "notebooks" / "q5_phong.ipynb"), as_version=4))
     before = _run(scratch, "facts", "--check")
     assert before.returncode == 1 and "part (c): the header says 3 marks" in before.stderr
 
