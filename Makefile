@@ -134,15 +134,21 @@ test: $(STAMP) browser-deps a11y-deps sandbox-deps wheel-deps postgres-deps hub-
 	@echo "make test: the whole suite, about 30 minutes on a fresh clone on 2 cores, the real hub's term and 30-user burst and the students' wheel probe included (one dot per test; make test-fast: about 1 minute)"
 	$(PYTEST) -n 2 --dist loadgroup -q
 
-## test-fast: the library against its oracles, the judging, the notebooks' contract and their
-## visible (and hidden) tests run in each source notebook, ruff: about 110 s of CPU, a minute on 2 quiet cores
+## test-fast: what a change to an exercise can break, in about a minute of wall time on 2 quiet
+## cores: the library against its oracles, the judging and every registry rule, the notebooks'
+## contract, marks and counts (test_facts), their visible and hidden tests run in each source
+## notebook, the honest bank judged in process, new-exercise on a scratch copy, the students'
+## wheel's name rules, the docs' links, ruff
 FAST_TESTS := tests/course_lib tests/grading/test_judging.py tests/grading/test_handback_page.py \
-              tests/notebooks/test_contract.py tests/notebooks/test_q1_q2_facts.py \
+              tests/grading/test_cell_verdict.py tests/grading/test_honest_in_process.py \
+              tests/notebooks/test_contract.py tests/notebooks/test_facts.py \
+              tests/notebooks/test_new_exercise.py tests/notebooks/test_items_ask_first.py \
+              tests/notebooks/test_student_wheel_guard.py tests/notebooks/test_q1_q2_facts.py \
               tests/notebooks/test_q4_items.py tests/notebooks/test_q5_q6_items.py \
-              tests/notebooks/test_execute_sources.py tests/test_lint.py
+              tests/notebooks/test_execute_sources.py tests/test_docs_links.py tests/test_lint.py
 # no xdist group among them: worksteal hands a long test's neighbours to the idle worker
 test-fast: $(STAMP)
-	@echo "make test-fast: library, judging, notebooks (about a minute on 2 quiet cores; make test runs everything)"
+	@echo "make test-fast: library, judging, notebooks, marks and counts, honest bank, docs' links (about a minute on 2 quiet cores; make test runs everything)"
 	$(PYTEST) -n 2 --dist worksteal -q $(FAST_TESTS)
 
 ## bench: benchmarks against peers measured in the same run (writes benchmarks/results.md)

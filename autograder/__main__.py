@@ -8,6 +8,8 @@ Each command lives in its own module with a ``add_arguments(parser)`` and a ``ma
 - ``export``   Canvas, Moodle and long-format grades (autograder/cli_export.py)
 - ``watch``    grade each submission as it arrives, feedback at once (autograder/service/)
 - ``lab``      JupyterLab on the student or the instructor view (autograder/lab.py)
+- ``facts``    the course's counts and marks, and where the prose disagrees (autograder/facts.py)
+- ``new-exercise`` a graded function's cells, registry entry and stubs (autograder/new_exercise.py)
 """
 
 from __future__ import annotations
@@ -31,6 +33,10 @@ COMMANDS = {
     "watch": ("autograder.service.cli", "grade each submission as it arrives and hand its "
               "feedback back at once (the grading service)"),
     "lab": ("autograder.lab", "open JupyterLab on the course (student or instructor view)"),
+    "facts": ("autograder.facts", "print the course's counts and each notebook's marks by part "
+              "(--check: where the docs or the notebooks' text disagree)"),
+    "new-exercise": ("autograder.new_exercise", "add a graded function: its cells, registry "
+                     "entry, reference, honest answer and test stubs"),
 }
 
 

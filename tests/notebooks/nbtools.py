@@ -123,6 +123,15 @@ def graded_items(nb) -> dict[str, str]:
     return items
 
 
+def graded_in(module: str) -> tuple[str, ...]:
+    """The graded functions whose reference is in ``course_lib.<module>``, from the registry
+    (a typed list would miss a function added later); the students' wheel leaves them out."""
+    from autograder.exercises import REGISTRY
+
+    return tuple(ex.name for ex in REGISTRY.values() if ex.kind == "function"
+                 and ex.reference.__module__ == f"course_lib.{module}")
+
+
 def autograded_points(nb) -> dict[str, float]:
     """``{grade_id: points}`` of the auto-graded (code) test cells."""
     return {

@@ -22,10 +22,10 @@ import pytest
 from nbtools import all_points, graded_items, nbgrader_meta, read
 
 from autograder.course import REPO_ROOT, source_notebooks
+from autograder.facts import MARKS_PER_NOTEBOOK
 
 NOTEBOOKS = source_notebooks()
 CHECKER = REPO_ROOT.parent / "shared" / "tools" / "check_contract.py"
-MARKS_PER_NOTEBOOK = 20
 ids = [p.stem for p in NOTEBOOKS]
 
 

@@ -98,12 +98,18 @@ def test_wheel_requirements_match_pyproject():
 
 
 def test_the_wheel_leaves_out_every_graded_function():
+    from nbtools import graded_items, read
+
+    from autograder.course import source_notebooks
     from autograder.exercises import REGISTRY
 
     graded = {(ex.reference.__module__, ex.reference.__qualname__)
               for ex in REGISTRY.values() if ex.kind == "function"}
     withheld = {(m, n) for m, names in student_bundle.withheld_functions().items() for n in names}
-    assert len(graded) == 36 and withheld == graded
+    # the count of functions the notebooks grade, not a number typed here (autograder/facts.py)
+    in_notebooks = [name for path in source_notebooks()
+                    for name, kind in graded_items(read(path)).items() if kind == "function"]
+    assert len(graded) == len(in_notebooks) > 0 and withheld == graded
 
 
 def test_left_out_functions_go_with_their_decorators_and_all_entries():
