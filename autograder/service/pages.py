@@ -65,22 +65,20 @@ def closed_page(student: str, notebook: str, rows: list[CellResult], line: str) 
 
 def not_graded_page(student: str, notebook: str, line: str, reopens: dt.datetime) -> str:
     """The page of a notebook submitted with no graded attempt left in the window."""
-    body = [f"<h1>{e(notebook)}</h1>", f"<p class='attempts'><b>{e(line)}</b></p>",
-            f"<p class='msg'>This version was recorded but not graded: no graded attempt is "
-            f"left today. The next one opens at {e(reopens.strftime('%Y-%m-%d %H:%M %Z'))}. "
-            "Your earlier graded attempts keep their feedback and their place in the "
-            "course's policy (which attempt counts).</p>"]
-    return page(f"{notebook}: feedback for {student}", body, feedback._STYLE)
+    return _message_page(
+        student, notebook, line,
+        f"This version was recorded but not graded: no graded attempt is left today. The next "
+        f"one opens at {e(reopens.strftime('%Y-%m-%d %H:%M %Z'))}. Your earlier graded attempts "
+        "keep their feedback and their place in the course's policy (which attempt counts).")
 
 
 def too_large_page(student: str, notebook: str, line: str, size: int, limit: int) -> str:
     """The page of a notebook over the size limit: not read, not graded, no attempt charged."""
-    body = [f"<h1>{e(notebook)}</h1>", f"<p class='attempts'><b>{e(line)}</b></p>",
-            f"<p class='msg'>This version was not graded and cost no attempt: the file is "
-            f"{size / 2**20:.1f} MB, over the limit of {limit / 2**20:g} MB a notebook may be "
-            "(huge outputs?). Clear all outputs (Edit &gt; Clear Outputs of All Cells), save "
-            "and submit again.</p>"]
-    return page(f"{notebook}: feedback for {student}", body, feedback._STYLE)
+    return _message_page(
+        student, notebook, line,
+        f"This version was not graded and cost no attempt: the file is {size / 2**20:.1f} MB, "
+        f"over the limit of {limit / 2**20:g} MB a notebook may be (huge outputs?). Clear all "
+        "outputs (Edit &gt; Clear Outputs of All Cells), save and submit again.")
 
 
 def failed_page(student: str, notebook: str, line: str, why: str, charged: bool) -> str:
@@ -88,9 +86,15 @@ def failed_page(student: str, notebook: str, line: str, why: str, charged: bool)
     student); ``charged``: it counted as a graded attempt, scored 0."""
     cost = ("It counted as a graded attempt of this notebook, scored 0 (what counts for your "
             "mark is unchanged)." if charged else "It cost no graded attempt.")
+    return _message_page(student, notebook, line,
+                         f"This submission could not be graded: {e(why)}. {cost} Submit again "
+                         "to be graded; your instructor has the details.")
+
+
+def _message_page(student: str, notebook: str, line: str, message_html: str) -> str:
+    """A page of no grades: the notebook, its attempts line and one message (already HTML)."""
     body = [f"<h1>{e(notebook)}</h1>", f"<p class='attempts'><b>{e(line)}</b></p>",
-            f"<p class='msg'>This submission could not be graded: {e(why)}. {cost} Submit "
-            "again to be graded; your instructor has the details.</p>"]
+            f"<p class='msg'>{message_html}</p>"]
     return page(f"{notebook}: feedback for {student}", body, feedback._STYLE)
 
 
