@@ -34,7 +34,7 @@ from ..model import CellKind
 from ..course import default_db_url
 from ..outputs.gradebook_url import MissingDriver, resolve_db_url
 from ..outputs.similarity import reference_source
-from . import remedy
+from . import ownership, remedy
 from ..service.incremental import grade_in_chunks, write_csv_atomic
 from .batch import Options
 from .executors import ClusterUnavailable
@@ -197,13 +197,26 @@ def main(args: argparse.Namespace) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     # the decisions are logged first: report.html shows them beside the "Own numbers" evidence
-    logged = [remedy.log(args.out, changes, batch)] if changes else []
-    written = _write_outputs(batch, sources, args) + logged
+    try:
+        logged = [remedy.log(args.out, changes, batch)] if changes else []
+        written = _write_outputs(batch, sources, args) + logged
+    finally:
+        _give_back(args)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"graded {len(batch.students)} students, {len(batch.results)} cells in "
           f"{time.monotonic() - t0:.0f} s (grader peak memory {peak_mb:.0f} MB); wrote:\n"
           + "\n".join(f"  {w}" for w in written), file=sys.stderr)
     return 0
+
+
+def _give_back(args) -> None:
+    """Run as root (as grading must be), give what was written to the course folder's owner
+    (:mod:`~autograder.grade.ownership`): the instructor marks and exports as themselves."""
+    root = gradebook.course_root(args.submitted, args.out)
+    trees = [args.out, root / "autograded", root / "gradebook.db", root / "gradebook.db-journal"]
+    ownership.give_back(root, trees)
+    if args.out.resolve() != root and not args.out.resolve().is_relative_to(root):
+        ownership.give_back(args.out.parent, [args.out])
 
 
 def _write_outputs(batch, sources, args) -> list[str]:
