@@ -502,6 +502,36 @@ def test_scratch_is_small_and_private(mode):
     assert [o.value for o in runs.outcomes] == ["ENOSPC", ("/tmp", "/tmp")]
 
 
+KEEPER = """
+import os
+def keep(x):
+    top = f"/tmp/k{x}"
+    os.makedirs(top + "/deep")
+    for folder in (top + "/deep", top):
+        with open(folder + "/" + str(x), "w") as f:
+            f.write(str(x))
+    os.chmod(top + "/deep", 0o555)
+    os.chmod(top, 0o555)           # a plain rmtree as this uid can no longer empty it
+    return x
+"""
+
+FINDER = """
+import os
+def find(x):
+    return sorted(os.path.join(top, f) for top, _, files in os.walk("/tmp") for f in files)
+"""
+
+
+def test_a_folder_made_read_only_keeps_nothing_for_a_later_name(mode):
+    """The scratch is emptied before each name (a red team kept one name's hidden inputs in a
+    folder it made read-only, and read them in a later name's visible case)."""
+    if mode is not Mode.ISOLATED:
+        pytest.skip("the scratch folder is emptied between names only in the sandbox")
+    runs = run(mode, fn("keep", KEEPER, cases=[(11,), (22,)]), fn("find", FINDER, cases=[(0,)]))
+    assert [o.value for o in runs["keep"].outcomes] == [11, 22]
+    assert runs["find"].outcomes[0].value == [], runs["find"].outcomes[0]
+
+
 def test_time_limits_and_crashes(mode):
     slow = fn("slow", """
         import os, time

@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import os
 import select
-import shutil
 import signal
+import stat
 import time
 
 from .confine import WALL_FACTOR, process_cpu_seconds
@@ -73,35 +73,60 @@ def kill_leftovers(worker_pid: int | None) -> None:
         time.sleep(0.002)
 
 
-def empty_folder(path: str) -> None:
+def empty_folder(path: str) -> bool:
     """Remove everything inside ``path`` (the sandbox's private scratch; ``""``: nothing), in
     a child process: the names a worker chose (they may spell a case's inputs) never enter
-    this process's memory, which every later worker inherits."""
+    this process's memory, which every later worker inherits. True when ``path`` is empty
+    afterwards (the child's exit status says so)."""
     if not path:
-        return
+        return True
     try:
         pid = os.fork()
     except OSError:
-        return
+        return False
     if pid == 0:
+        empty = False
         try:
             _remove_inside(path)
+            empty = not os.listdir(path)
         finally:
-            os._exit(0)
+            os._exit(0 if empty else 1)
     try:
-        os.waitpid(pid, 0)
+        _, status = os.waitpid(pid, 0)
     except ChildProcessError:
-        pass
+        return False
+    return os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0
 
 
 def _remove_inside(path: str) -> None:
-    for entry in os.listdir(path):
-        full = os.path.join(path, entry)
+    """Everything below ``path``, without recursion (a worker may nest folders thousands
+    deep) and whatever modes a worker left: a folder it made read-only (``chmod 0o555``)
+    would keep its files from a plain ``rmtree`` run as the same unprivileged uid, so every
+    folder is made writable by its owner first (this process runs as that owner)."""
+    folders, stack = [], [path]
+    while stack:
+        folder = stack.pop()
+        try:        # (the scratch's own root may be root's, 1777: nothing to change there)
+            os.chmod(folder, stat.S_IMODE(os.lstat(folder).st_mode) | stat.S_IRWXU)
+        except OSError:
+            pass
         try:
-            if os.path.isdir(full) and not os.path.islink(full):
-                shutil.rmtree(full, ignore_errors=True)
-            else:
-                os.unlink(full)
+            entries = os.listdir(folder)
+        except OSError:
+            continue
+        folders.append(folder)
+        for entry in entries:
+            full = os.path.join(folder, entry)
+            try:
+                if stat.S_ISDIR(os.lstat(full).st_mode):
+                    stack.append(full)
+                else:
+                    os.unlink(full)
+            except OSError:
+                pass
+    for folder in reversed(folders[1:]):        # deepest first; never ``path`` itself
+        try:
+            os.rmdir(folder)
         except OSError:
             pass
 
@@ -171,8 +196,12 @@ class NameSupervisor:
         kill_leftovers(self.pid)
         if self.launches == 0:
             # a new name: nothing an earlier name's worker stored is left (a restart keeps it:
-            # what it finds is of cases already run, and hidden cases run last)
-            empty_folder(self.scratch)
+            # what it finds is of cases already run, and hidden cases run last); a scratch that
+            # cannot be emptied could carry an earlier name's inputs, so this name does not run
+            if not empty_folder(self.scratch):
+                self.settle_rest("not-run", "not run: the scratch folder could not be emptied "
+                                            "of what an earlier function stored there")
+                return False
         self.launches += 1
         rfd, wfd = os.pipe()
         crfd, cwfd = os.pipe()
