@@ -15,6 +15,7 @@ import re
 from dataclasses import dataclass, field
 
 from ..isolation.allowlist import ALLOWED_COURSE_MODULES, ALLOWED_REFERENCE, ALLOWED_WHOLE_MODULES
+from ..isolation.inside.wire import MAX_INT_BITS
 from ..model import AnswerHint, AnswerShape, CellKind, SourceNotebook, Status, Submission
 from .magics import PARSE_ERRORS, to_python
 
@@ -90,6 +91,8 @@ def typed_answer(code: str, name: str):
 
 
 def _plain_literal(value, depth: int = 0):
+    if type(value) is int and value.bit_length() > MAX_INT_BITS:
+        return NOT_TYPED        # as from the sandbox: no page, CSV or report prints it
     if value is None or type(value) in (bool, int, float, str):
         return value
     if type(value) in (list, tuple) and depth < 3:

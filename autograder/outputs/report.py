@@ -115,24 +115,29 @@ def render(results: list[CellResult], sources: list[SourceNotebook],
             f"{sum(r.kind is not CellKind.MANUAL for r in results)} automatically graded cells. "
             "Written answers are marked in formgrader and are not included here.</p>"]
     body += _distributions(results, sources) + _most_failed_html(results)
-    body += [_items_section(results, sources)]
+    body += [_section("items", "Items", items_html, results, sources)]
     body += _grader_errors_html(results) + _ungradeable_html(results)
-    body += [similar_solutions_html(results, references, jobs), own_numbers_html(results)]
-    body += [graded_as_html(graded_as or [])]
+    body += [_section("similar", "Similar solutions", similar_solutions_html, results,
+                      references, jobs),
+             _section("own-numbers", "Own numbers", own_numbers_html, results)]
+    body += [_section("graded-as", "Graded as", graded_as_html, graded_as or [])]
     body += _statuses_html(results)
     return page(f"{ASSIGNMENT}: grading report", body, _STYLE + ITEMS_STYLE)
 
 
-def _items_section(results, sources) -> str:
-    """The item analysis; should it fail, the rest of the report is still written."""
+def _section(anchor: str, title: str, build, *args) -> str:
+    """One section of the report, built by ``build(*args)``; should it fail (it reads what
+    students typed and returned), the rest of the report is still written and this section
+    says so."""
     try:
-        return items_html(results, sources)
+        return build(*args)
     except Exception as exc:  # noqa: BLE001 - one section never costs the whole page
         traceback.print_exc(limit=3)
-        print(f"warning: the report's item analysis failed ({type(exc).__name__})",
+        print(f"warning: the report's section {title!r} failed ({type(exc).__name__})",
               file=sys.stderr)
-        return (f"<section id='items'><h2>Items</h2><p>The item analysis failed "
-                f"({e(type(exc).__name__)}); the traceback is in the grading log.</p></section>")
+        return (f"<section id='{e(anchor)}'><h2>{e(title)}</h2><p>This section could not be "
+                f"built ({e(type(exc).__name__)}); the traceback is in the grading log.</p>"
+                "</section>")
 
 
 def _distributions(results, sources) -> list[str]:

@@ -558,15 +558,21 @@ def test_grade_writes_items_csv_and_the_section(tmp_path, sources, monkeypatch):
     assert "<td class='num'>1</td>" in rows["(a)"] and "<td class='num'>0</td>" in rows["(b)"]
 
 
-def test_a_failing_item_analysis_costs_only_its_section(klass, monkeypatch, capsys):
+@pytest.mark.parametrize("builder, title", [("items_html", "Items"),
+                                             ("similar_solutions_html", "Similar solutions"),
+                                             ("own_numbers_html", "Own numbers")])
+def test_a_failing_section_costs_only_itself(klass, monkeypatch, capsys, builder, title):
+    """A section that fails on what students typed (a red team's 3,700-digit number item
+    stopped the whole report, its "Similar solutions" evidence included) costs that section."""
     from autograder.outputs import report
 
     def broken(*_a, **_k):
         raise RuntimeError("boom")
-    monkeypatch.setattr(report, "items_html", broken)
+    monkeypatch.setattr(report, builder, broken)
     page = report.render(klass["results"][:FILLERS + 5], [])
-    assert "The item analysis failed (RuntimeError)" in page and "Statuses</h2>" in page
-    assert "item analysis failed" in capsys.readouterr().err
+    assert f"<h2>{title}</h2><p>This section could not be built (RuntimeError)" in page
+    assert "Statuses</h2>" in page and "Score distribution" in page
+    assert f"section {title!r} failed" in capsys.readouterr().err
 
 
 @pytest.mark.slow

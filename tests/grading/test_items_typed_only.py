@@ -172,3 +172,16 @@ def test_every_form_the_notebooks_show_is_read_as_typed():
                     shown.add(name)
     value_items = {n for n in items if REGISTRY[n].kind is CellKind.VALUE}
     assert value_items <= shown and len(shown - value_items) >= 10
+
+
+def test_a_number_no_page_can_print_is_not_a_typed_answer():
+    """A 3,700-digit literal typed as a number item (a red team's) is read as nothing typed, as
+    the sandbox refuses such an int: ``str()`` of it raises, and the report printed it."""
+    from autograder.grade.planning import NOT_TYPED, typed_answer
+    from autograder.isolation.inside.wire import MAX_INT_BITS
+
+    huge = "0x" + "f" * 3700
+    assert typed_answer(f"q5b_your_intensity = [{huge}, 1.0, 1.0]", "q5b_your_intensity") \
+        is NOT_TYPED
+    assert typed_answer(f"x = {2 ** MAX_INT_BITS - 1}", "x") == 2 ** MAX_INT_BITS - 1
+    assert typed_answer(f"x = {2 ** MAX_INT_BITS}", "x") is NOT_TYPED
