@@ -24,7 +24,9 @@ import pytest
 
 from autograder.course import REPO_ROOT
 
-NAME = "blinn_phong_specular_exponent"
+#: a name no real exercise will take: a TA adding the docs' example (blinn_phong_specular_exponent)
+#: to the course must not collide with this scratch run
+NAME = "scratch_blinn_phong_exponent"
 _IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc", "_build*")
 
 
@@ -89,9 +91,16 @@ def _fill_in(root: Path) -> None:
              r'    raise NotImplementedError\(\n        "write the cases of .*?yield Case\(\)\n',
              _CASES)
     _replace(root / "tests" / "grading" / "honest" / "q5_phong.py",
-             r'    raise NotImplementedError\(\n        "blinn_phong_specular_exponent: a short.*?\)\n',
+             rf'    raise NotImplementedError\(\n        "{NAME}: a short.*?\)\n',
              "    if not 0 < n < float('inf'):\n        raise ValueError('bad n')\n"
              "    return 4 * float(n)\n")
+
+    from autograder.new_exercise import _marks_words
+
+    nb = json.loads((root / "notebooks" / "q5_phong.ipynb").read_text(encoding="utf-8"))
+    was = next(c["metadata"]["nbgrader"]["points"] for c in nb["cells"]
+               if c["metadata"].get("nbgrader", {}).get("grade_id") == "q5c_answer")
+    moved = {_marks_words(was): _marks_words(was - 0.5)}
 
     def edit(cell, gid):
         source = "".join(cell["source"])
@@ -101,8 +110,9 @@ def _fill_in(root: Path) -> None:
             source = source.replace(f"assert {NAME} is not None",
                                     f"assert np.isclose({NAME}(10.0), 40.0)")
         elif gid == "q5c_answer":
-            cell["metadata"]["nbgrader"]["points"] = 1.0
-        source = source.replace("*[1½ marks, marked by hand]*", "*[1 mark, marked by hand]*")
+            cell["metadata"]["nbgrader"]["points"] = was - 0.5
+        for old, new in moved.items():          # the written answer's prompt, below its cell
+            source = source.replace(f"*[{old}, marked by hand]*", f"*[{new}, marked by hand]*")
         cell["source"] = source.splitlines(keepends=True)
 
     _edit_cells(root / "notebooks" / "q5_phong.ipynb", edit)
