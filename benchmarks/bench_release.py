@@ -156,7 +156,11 @@ def run(smoke: bool = False) -> list[Row]:
         labs = {}
         for who, rev in (("ours", "HEAD"), ("peer", PEER)):
             print(f"  {who}: lab to first notebook ({_load()})", file=sys.stderr, flush=True)
-            labs[who] = (*_lab(_export(rev, Path(tmp) / f"lab-{who}")), _load())
+            try:
+                labs[who] = (*_lab(_export(rev, Path(tmp) / f"lab-{who}")), _load())
+            except (OSError, RuntimeError, subprocess.SubprocessError) as exc:
+                print(f"  {who}: lab failed: {exc}", file=sys.stderr, flush=True)
+                labs[who] = (float("nan"), None, _load())
         (shown_o, ready_o, load_o), (shown_p, _, load_p) = labs["ours"], labs["peer"]
         wheel = f"; ours' wheel installed at {ready_o:.0f} s" if ready_o else ""
         rows.append(Row(SECTION, "make lab, fresh tree", "to first notebook", shown_o, shown_p,
