@@ -106,3 +106,10 @@ def test_a_build_compiles_only_the_modules_whose_source_changed(tmp_path):
     assert report.startswith("compiling 1 of 2 modules"), report
     assert got == {"code": 2, "data": 21}       # the new code; the data module from the cache
     assert len(list(cache.glob("*.so"))) == 3
+
+
+def test_compiler_flags_from_the_environment_change_the_compiler_identity(monkeypatch):
+    monkeypatch.delenv("CFLAGS", raising=False)
+    plain = student_setup.compiler_identity()
+    monkeypatch.setenv("CFLAGS", "-g")      # debug information would reach the binaries
+    assert student_setup.compiler_identity() != plain
