@@ -579,7 +579,7 @@ def ensure_student_requirements(env_dir: Path, base_python: str | None = None) -
         if not stamp.exists() or stamp.read_text() != wanted:
             print(f"installing JupyterLab, nbgrader and the course's other requirements into "
                   f"{env_dir} ...", file=sys.stderr, flush=True)
-            # no byte-compiling of every installed file (a third of pip's time here): what the
+            # no byte-compiling of every file of JupyterLab and its dependencies: what the
             # server and kernels import is compiled on first use
             _pip(env_dir, "install", "--no-compile", *student_requirements())
             stamp.write_text(wanted)
