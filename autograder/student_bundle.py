@@ -499,7 +499,10 @@ def build_wheel(cache_dir: Path) -> Path:
         with tempfile.TemporaryDirectory(prefix="4f9-student-wheel-") as tmp:
             stage = stage_sources(Path(tmp) / "src", digest, modules)
             wheel = _run_build(stage, Path(tmp) / "dist")
-            print(f"compiled in {time.monotonic() - started:.0f} s", file=sys.stderr, flush=True)
+            report = stage / "compiled.txt"
+            said = report.read_text().replace("compiling", "compiled") if report.exists() \
+                else "compiled"
+            print(f"{said} in {time.monotonic() - started:.0f} s", file=sys.stderr, flush=True)
             problems = wheel_problems(wheel)
             if problems:
                 raise WheelLeak("the student wheel would leak instructor material:\n  "

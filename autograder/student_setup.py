@@ -36,6 +36,8 @@ from setuptools.command.build_py import build_py
 #: what to build, written by ``student_bundle``: {"packages", "compiled", "init_only",
 #: "data_files", "module_cache"}
 BUNDLE_FILE = Path(__file__).resolve().parent / "bundle.json"
+#: how many modules the build compiled and took from the module cache, for ``student_bundle``
+REPORT_FILE = BUNDLE_FILE.with_name("compiled.txt")
 
 #: docstrings stay (students read them with ``?``); no debug info, no source comments in the .so
 CYTHON_DIRECTIVES = {
@@ -120,8 +122,10 @@ class CachedBuildExt(build_ext):
                 todo.append((ext, cached))
         # the slowest first, so that the last one to start does not keep a core waiting alone
         todo.sort(key=lambda item: -Path(item[0].sources[0]).stat().st_size)
-        print(f"compiling {len(todo)} of {len(self.extensions)} modules "
-              f"({len(self.extensions) - len(todo)} from the module cache)", flush=True)
+        report = (f"compiling {len(todo)} of {len(self.extensions)} modules "
+                  f"({len(self.extensions) - len(todo)} from the module cache)")
+        print(report, flush=True)
+        REPORT_FILE.write_text(report)      # pip hides this output: the caller says it
         if not todo:
             return
         from Cython.Build import cythonize

@@ -75,6 +75,7 @@ def _build(stage: Path) -> tuple[str, dict[str, object]]:
                           capture_output=True, text=True, timeout=900, check=False)
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
     report = [line for line in proc.stdout.splitlines() if line.startswith("compiling ")]
+    assert report and (stage / "compiled.txt").read_text() == report[-1]
     for source in (stage / "pkg").glob("[!_]*.py"):
         source.unlink()      # the values below come from the binaries
     probe = subprocess.run(
