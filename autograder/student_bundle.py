@@ -14,7 +14,7 @@ every built wheel for exactly that before it is handed out.
 A compiled wheel fits one Python version and platform (its tags say which): build the release
 with the interpreter the students use (e.g. the course's JupyterHub image).
 
-Compiling every module takes about 150 CPU seconds (a few minutes on two busy cores), so wheels
+Compiling every module takes about 90 CPU seconds (minutes on two busy cores), so wheels
 are cached in a build folder, keyed on a digest of everything that goes into them
 (:func:`sources_digest`); the digest is also the wheel's local version label, so ``pip``
 upgrades an environment whenever the sources change. Within a build, each module's binary is
