@@ -26,7 +26,9 @@ setup: $(STAMP) sandbox-deps wheel-deps mathjax-deps
 	@echo "setup done: activate with '. .venv/bin/activate' (or run .venv/bin/python -m autograder ...)"
 
 ## lab: open the course in JupyterLab as a student: the released notebooks, run in
-## $(STUDENT_VENV) with the students' compiled wheel (rebuilt and reinstalled when sources change)
+## $(STUDENT_VENV) with the students' compiled wheel (rebuilt and reinstalled when sources change;
+## while it compiles, JupyterLab is already open on an environment without course_lib, and the
+## terminal says what it waits for and when the wheel is in)
 lab: $(STAMP) wheel-deps
 	$(BIN)/python -m autograder lab --role student --student-env $(STUDENT_VENV) --port $(PORT)
 

@@ -6,7 +6,12 @@
     ``--student-env DIR`` (``make lab`` passes ``.venv-student``) JupyterLab and the kernels run
     in that environment of their own, holding the students' wheel and nothing of this
     repository (:mod:`autograder.student_bundle`; built and installed when the sources change),
-    so the view is exactly what students get. Without it the instructors' environment serves
+    so the view is exactly what students get. When that wheel still has to be built (a fresh
+    clone, a changed module), JupyterLab opens at once in the environment holding the wheel's
+    requirements but no ``course_lib`` at all, and the wheel is installed there when it is built
+    (:class:`WheelInstall`, which says so): the first notebook shows within the time of a
+    release and an install of the requirements, and the kernel never sees anything a student
+    could not have, not even briefly. Without it the instructors' environment serves
     the release, a quick preview in which ``course_lib`` sources stay readable. The nbgrader
     "Create Assignment", "Formgrader" and "Course List" plugins are disabled for this launch (and
     the formgrader / course-list server extensions with them); the "Validate" button and the
@@ -38,6 +43,7 @@ import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -53,8 +59,10 @@ from .student_bundle import (
     STUDENT_DISABLED_PLUGINS,
     STUDENT_DISABLED_SERVER_EXTENSIONS,
     build_wheel,
+    cached_wheel,
     default_build_cache,
     ensure_student_env,
+    ensure_student_requirements,
     student_env_vars,
 )
 
@@ -159,7 +167,7 @@ def launch(
         root_dir, default_url = course.root, "/lab"
     token = secrets.token_hex(24) if token is None else token
     write_launch_config(config_dir, role, course.root)
-    python, env = launch_environment(role, course.root, student_env, build_cache)
+    python, env, pending = launch_environment(role, course.root, student_env, build_cache)
     # the kernels must pick their backend as in any JupyterLab (inline, or a student's own
     # ``%matplotlib widget``): the Agg that ``make`` and the test runs export would hide figures
     env.pop("MPLBACKEND", None)
@@ -170,25 +178,67 @@ def launch(
     proc = subprocess.Popen(cmd, cwd=root_dir, env=env, stdout=stdout, stderr=stderr)
     host = "localhost" if ip in ("127.0.0.1", "localhost", "") else ip
     url = f"http://{host}:{port}{default_url}" + (f"?token={token}" if token else "")
+    if pending is not None:
+        pending.start()
     return proc, url
 
 
 def launch_environment(
     role: str, course_root: Path, student_env: Path | None, build_cache: Path | None
-) -> tuple[Path | None, dict]:
-    """``(python, environment variables)`` of the JupyterLab a launch starts.
+) -> tuple[Path | None, dict, WheelInstall | None]:
+    """``(python, environment variables, pending)`` of the JupyterLab a launch starts.
 
-    ``python`` is ``None`` for this interpreter (the instructors' environment).
+    ``python`` is ``None`` for this interpreter (the instructors' environment). When the
+    students' wheel of the current sources is not built yet, the environment is opened with
+    its requirements alone (no ``course_lib``: nothing a student could not have) and
+    ``pending`` is the :class:`WheelInstall` that builds the wheel and installs it there once
+    the server is up (a fresh clone compiles every module: minutes); otherwise ``None``.
     """
     if student_env is None:
-        return None, nbgrader_env()
+        return None, nbgrader_env(), None
     if role != "student":
         raise ValueError("student_env is for role 'student' only")
-    wheel = build_wheel(build_cache or default_build_cache(course_root))
-    python = ensure_student_env(Path(student_env), wheel)
+    cache = build_cache or default_build_cache(course_root)
+    wheel = cached_wheel(cache)
+    pending = None
+    if wheel is not None:
+        python = ensure_student_env(Path(student_env), wheel)
+    else:
+        python = ensure_student_requirements(Path(student_env))
+        pending = WheelInstall(cache, Path(student_env))
     env = student_env_vars(Path(student_env))
     env.setdefault("PYTHONIOENCODING", "utf-8")
-    return python, env
+    return python, env, pending
+
+
+class WheelInstall(threading.Thread):
+    """Builds the students' wheel into ``cache`` and installs it into the students'
+    environment ``env_dir`` behind a running JupyterLab, saying what it waits for and when
+    ``course_lib`` can be imported (a kernel started before then has none: run the setup cell
+    again). ``error`` holds what stopped it, if anything."""
+
+    def __init__(self, cache: Path, env_dir: Path):
+        super().__init__(name="4f9-student-wheel", daemon=True)
+        self.cache, self.env_dir, self.error = Path(cache), Path(env_dir), None
+
+    def run(self):
+        print(WAITING, file=sys.stderr, flush=True)
+        try:
+            ensure_student_env(self.env_dir, build_wheel(self.cache))
+        except (OSError, RuntimeError, ValueError, subprocess.SubprocessError) as exc:
+            self.error = exc
+            print(f"error: the students' wheel could not be built or installed: {exc}",
+                  file=sys.stderr, flush=True)
+            return
+        print(READY, file=sys.stderr, flush=True)
+
+
+#: what the student lab says while the wheel is built behind it, and once it is installed
+WAITING = ("4F9: waiting for the students' wheel: compiling course_lib's modules (on a fresh "
+           "clone all of them, a few minutes). The notebooks are open meanwhile; their setup "
+           "cell says 'No module named course_lib' until the next line says ready.")
+READY = ("4F9: ready: the students' wheel is installed; run each open notebook's setup cell "
+         "again (Kernel > Restart Kernel if it had failed).")
 
 
 def wait_until_listening(proc: subprocess.Popen, ip: str, port: int, timeout: float = 600,

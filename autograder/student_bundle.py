@@ -14,9 +14,13 @@ every built wheel for exactly that before it is handed out.
 A compiled wheel fits one Python version and platform (its tags say which): build the release
 with the interpreter the students use (e.g. the course's JupyterHub image).
 
-Building takes a minute or two on two cores, so wheels are cached in a build folder, keyed on a
-digest of everything that goes into them (:func:`sources_digest`); the digest is also the
-wheel's local version label, so ``pip`` upgrades an environment whenever the sources change.
+Compiling every module takes about 90 CPU seconds (minutes on two busy cores), so wheels
+are cached in a build folder, keyed on a digest of everything that goes into them
+(:func:`sources_digest`); the digest is also the wheel's local version label, so ``pip``
+upgrades an environment whenever the sources change. Within a build, each module's binary is
+cached too (``<build folder>/modules/``, keyed on that module's own staged source: see
+``student_setup.py``), so a change to one module recompiles that module and those whose
+students' copy it changes (a generated module, a routine's C-level copy), not all 42.
 :func:`ensure_student_env` makes (or refreshes) a virtual environment holding the wheel alone,
 which is what ``make lab`` opens (``.venv-student/``) and what the tests execute the release in.
 """
@@ -121,6 +125,11 @@ JUPYTER_CONFIG_FILES = {
 #: wheel members that must never reach a student, by suffix
 FORBIDDEN_SUFFIXES = (".pyc", ".pyo", ".c", ".cpp", ".h", ".pyx", ".pxd", ".ipynb")
 BUILD_TIMEOUT = 1800
+#: the build folder's sub-folder of compiled modules (one binary per module key)
+MODULE_CACHE = "modules"
+#: how many builds' worth of module binaries the module cache keeps (a few recent versions of
+#: each module: switching between branches does not recompile everything)
+MODULE_CACHE_BUILDS = 4
 
 
 class WheelLeak(RuntimeError):
@@ -301,11 +310,14 @@ def student_jupyter_config() -> dict[str, dict]:
 
 
 def bundle_spec() -> dict:
-    """What ``setup.py`` builds: the packages, the modules to compile, and the Jupyter config
-    files as setuptools ``data_files`` (``[[target dir, [staged file]], ...]``)."""
+    """What ``setup.py`` builds: the packages, the modules to compile (``init_only``: those
+    that only hold data, compiled without optimisation), and the Jupyter config files as
+    setuptools ``data_files`` (``[[target dir, [staged file]], ...]``)."""
     data_files = [[str(Path("etc/jupyter", path).parent), [str(Path("jupyter", path))]]
                   for path in JUPYTER_CONFIG_FILES]
-    return {"packages": library_packages(), "compiled": compiled_modules(),
+    compiled = compiled_modules()
+    return {"packages": library_packages(), "compiled": compiled,
+            "init_only": [m for m in compiled if m in GENERATED_MODULES],
             "data_files": data_files}
 
 
@@ -395,8 +407,9 @@ def _is_library_module(dotted: str) -> bool:
     return dotted in {module_name(p) for p in library_files()}
 
 
-def stage_sources(stage: Path, digest: str) -> Path:
-    """Fill ``stage`` with what ``pip wheel`` builds from: the library, setup, metadata."""
+def stage_sources(stage: Path, digest: str, module_cache: Path | None = None) -> Path:
+    """Fill ``stage`` with what ``pip wheel`` builds from: the library, setup, metadata; the
+    build keeps each compiled module in ``module_cache`` (none: every module is compiled)."""
     withheld = left_out()
     gone = {name for names in withheld.values() for name in names}
     for rel in shipped_files():
@@ -404,7 +417,9 @@ def stage_sources(stage: Path, digest: str) -> Path:
         text = staged_text(rel, withheld, gone)
         (stage / rel).write_text(text, encoding="utf-8")
     shutil.copyfile(SETUP_SCRIPT, stage / "setup.py")
-    (stage / "bundle.json").write_text(json.dumps(bundle_spec(), indent=1))
+    spec = bundle_spec()
+    spec["module_cache"] = str(module_cache) if module_cache is not None else None
+    (stage / "bundle.json").write_text(json.dumps(spec, indent=1))
     for path, content in student_jupyter_config().items():
         (stage / "jupyter" / path).parent.mkdir(parents=True, exist_ok=True)
         (stage / "jupyter" / path).write_text(json.dumps(content, indent=1))
@@ -453,6 +468,14 @@ def _run_build(stage: Path, out: Path) -> Path:
     return wheels[0]
 
 
+def cached_wheel(cache_dir: Path, digest: str | None = None) -> Path | None:
+    """The student wheel of the current sources (``digest``: :func:`sources_digest`) when
+    ``cache_dir`` holds it, else ``None`` (nothing is built)."""
+    digest = digest or sources_digest()
+    built = sorted((Path(cache_dir).resolve() / digest[:16]).glob("*.whl"))
+    return built[0] if len(built) == 1 else None
+
+
 def build_wheel(cache_dir: Path) -> Path:
     """The student wheel of the current sources, built into ``cache_dir/<digest>/`` if missing.
 
@@ -462,25 +485,47 @@ def build_wheel(cache_dir: Path) -> Path:
     target = Path(cache_dir).resolve() / digest[:16]
     target.parent.mkdir(parents=True, exist_ok=True)
     with file_lock(target.parent / ".build.lock"):
-        built = sorted(target.glob("*.whl"))
-        if len(built) == 1:
-            return built[0]
-        for old in target.parent.iterdir():  # one cached build at a time
-            if old.is_dir():
+        built = cached_wheel(cache_dir, digest)
+        if built is not None:
+            return built
+        modules = target.parent / MODULE_CACHE
+        for old in target.parent.iterdir():  # one cached wheel at a time
+            if old.is_dir() and old != modules:
                 shutil.rmtree(old)
-        print(f"compiling the students' wheel into {target} (about five minutes on two cores; "
-              "kept for the next runs) ...", file=sys.stderr, flush=True)
+        print(f"compiling the students' wheel into {target} (the modules that changed since "
+              "the last build; every one on a fresh clone, a few minutes on two cores) ...",
+              file=sys.stderr, flush=True)
         started = time.monotonic()
         with tempfile.TemporaryDirectory(prefix="4f9-student-wheel-") as tmp:
-            stage = stage_sources(Path(tmp) / "src", digest)
+            stage = stage_sources(Path(tmp) / "src", digest, modules)
             wheel = _run_build(stage, Path(tmp) / "dist")
-            print(f"compiled in {time.monotonic() - started:.0f} s", file=sys.stderr, flush=True)
+            report = stage / "compiled.txt"
+            said = report.read_text().replace("compiling", "compiled") if report.exists() \
+                else "compiled"
+            print(f"{said} in {time.monotonic() - started:.0f} s", file=sys.stderr, flush=True)
             problems = wheel_problems(wheel)
             if problems:
                 raise WheelLeak("the student wheel would leak instructor material:\n  "
                                 + "\n  ".join(problems))
             target.mkdir()
+            prune_module_cache(modules)
             return Path(shutil.copy2(wheel, target / wheel.name))
+
+
+def prune_module_cache(folder: Path, keep: int | None = None) -> None:
+    """Keep the ``keep`` most recently used binaries of the module cache ``folder`` (default:
+    :data:`MODULE_CACHE_BUILDS` builds' worth); drop temporary files a day old (left by a build
+    that died while storing)."""
+    keep = MODULE_CACHE_BUILDS * len(compiled_modules()) if keep is None else keep
+    try:
+        found = [(p, p.stat().st_mtime) for p in Path(folder).iterdir() if p.is_file()]
+    except OSError:
+        return
+    binaries = sorted((f for f in found if not f[0].name.startswith(".")),
+                      key=lambda f: f[1], reverse=True)
+    stale = [p for p, mtime in found if p.name.startswith(".") and mtime < time.time() - 86400]
+    for old in [p for p, _ in binaries[keep:]] + stale:
+        old.unlink(missing_ok=True)
 
 
 def write_bundle(out_dir: Path, cache_dir: Path) -> list[Path]:
@@ -510,23 +555,62 @@ def ensure_student_env(env_dir: Path, wheel: Path, base_python: str | None = Non
     env_dir = Path(env_dir).resolve()
     env_dir.mkdir(parents=True, exist_ok=True)  # ``venv`` fills an existing folder
     with file_lock(env_dir / ".student-env.lock"):
-        python = env_python(env_dir)
-        if not python.exists():
-            base = base_python or getattr(sys, "_base_executable", sys.executable)
-            subprocess.run([base, "-m", "venv", str(env_dir)], check=True, timeout=300,
-                           capture_output=True)
-        stamp = env_dir / ".student-wheel"
+        python = _make_env(env_dir, base_python)
+        stamp = env_dir / WHEEL_STAMP
         if not stamp.exists() or stamp.read_text() != Path(wheel).name:
             print(f"installing {Path(wheel).name} into {env_dir} ...", file=sys.stderr, flush=True)
-            proc = subprocess.run([str(python), "-m", "pip", "install", "--quiet",
-                                   "--disable-pip-version-check", str(wheel)],
-                                  capture_output=True, text=True, timeout=BUILD_TIMEOUT,
-                                  env=student_env_vars(env_dir), check=False)
-            if proc.returncode != 0:
-                raise RuntimeError(f"installing {Path(wheel).name} into {env_dir} failed:\n"
-                                   f"{proc.stdout[-2000:]}\n{proc.stderr[-3000:]}")
+            _pip(env_dir, "install", str(wheel))
             stamp.write_text(Path(wheel).name)
     return python
+
+
+def ensure_student_requirements(env_dir: Path, base_python: str | None = None) -> Path:
+    """A virtual environment at ``env_dir`` holding the students' wheel's requirements
+    (JupyterLab, nbgrader, NumPy...) and no ``course_lib``: what ``make lab`` opens while the
+    wheel of the current sources is being built (a wheel of other sources installed there
+    is removed first: it may hold a function that is graded now). Returns its interpreter."""
+    env_dir = Path(env_dir).resolve()
+    env_dir.mkdir(parents=True, exist_ok=True)
+    with file_lock(env_dir / ".student-env.lock"):
+        python = _make_env(env_dir, base_python)
+        stamp = env_dir / WHEEL_STAMP
+        if stamp.exists():
+            _pip(env_dir, "uninstall", "--yes", DIST_NAME)
+            stamp.unlink()
+        wanted = "\n".join(student_requirements())
+        stamp = env_dir / ".student-requirements"
+        if not stamp.exists() or stamp.read_text() != wanted:
+            print(f"installing JupyterLab, nbgrader and the course's other requirements into "
+                  f"{env_dir} ...", file=sys.stderr, flush=True)
+            # no byte-compiling of every file of JupyterLab and its dependencies: what the
+            # server and kernels import is compiled on first use
+            _pip(env_dir, "install", "--no-compile", *student_requirements())
+            stamp.write_text(wanted)
+    return python
+
+
+#: the file in a students' environment naming the wheel installed there
+WHEEL_STAMP = ".student-wheel"
+
+
+def _make_env(env_dir: Path, base_python: str | None) -> Path:
+    python = env_python(env_dir)
+    if not python.exists():
+        base = base_python or getattr(sys, "_base_executable", sys.executable)
+        subprocess.run([base, "-m", "venv", str(env_dir)], check=True, timeout=300,
+                       capture_output=True)
+    return python
+
+
+def _pip(env_dir: Path, *args: str) -> None:
+    """``pip ARGS`` in the students' environment ``env_dir``; ``RuntimeError`` when it fails."""
+    proc = subprocess.run([str(env_python(env_dir)), "-m", "pip", *args[:1], "--quiet",
+                           "--disable-pip-version-check", *args[1:]],
+                          capture_output=True, text=True, timeout=BUILD_TIMEOUT,
+                          env=student_env_vars(env_dir), check=False)
+    if proc.returncode != 0:
+        raise RuntimeError(f"pip {' '.join(args)} in {env_dir} failed:\n"
+                           f"{proc.stdout[-2000:]}\n{proc.stderr[-3000:]}")
 
 
 def student_env_vars(env_dir: Path, base: dict | None = None) -> dict:
